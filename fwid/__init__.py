@@ -1,0 +1,78 @@
+"""fwid: identify the flight dynamics of flapping-wing micro air vehicles from free-flight data.
+
+Importing fwid turns on JAX's 64-bit mode (`jax_enable_x64`): output-error estimation needs
+float64 (Gauss-Newton with tight tolerances never terminates in float32). Set the environment
+variable `FWID_NO_X64=1` to keep JAX's default and manage the precision yourself.
+"""
+
+import os as _os
+
+import jax as _jax
+
+if not _os.environ.get("FWID_NO_X64"):
+    _jax.config.update("jax_enable_x64", True)
+
+from ._errors import (
+    ExcitationError as ExcitationError,
+    FitDivergedError as FitDivergedError,
+    FlightDataError as FlightDataError,
+    FwidError as FwidError,
+    InputError as InputError,
+)
+
+__version__ = "0.1.0"
+
+from .data import (
+    Flight as Flight,
+    Vehicle as Vehicle,
+    estimate_trim as estimate_trim,
+    first_input_index as first_input_index,
+    load_flight as load_flight,
+    load_flights as load_flights,
+    load_vehicle as load_vehicle,
+)
+from .decompose import (
+    Decomposition as Decomposition,
+    check_flapping_frequency as check_flapping_frequency,
+    cycle_averaged as cycle_averaged,
+    decompose as decompose,
+    estimate_flapping_frequency as estimate_flapping_frequency,
+    flapping_part as flapping_part,
+    flapping_phase as flapping_phase,
+    highpass as highpass,
+    lowpass as lowpass,
+)
+from .models import (
+    GreyBoxModel as GreyBoxModel,
+    heading_rate as heading_rate,
+    lateral as lateral,
+    longitudinal as longitudinal,
+)
+from .simulate import (
+    RK4 as RK4,
+    Experiment as Experiment,
+    experiment as experiment,
+    simulate as simulate,
+    simulate_forces as simulate_forces,
+    stack_experiments as stack_experiments,
+    unstack_experiments as unstack_experiments,
+)
+from .estimate import (
+    DampedGaussNewton as DampedGaussNewton,
+    FitResult as FitResult,
+    fit as fit,
+    least_squares_start as least_squares_start,
+)
+from .validate import eigenvalues as eigenvalues, fit_metrics as fit_metrics, modes as modes
+from ._identify import (
+    FlightFit as FlightFit,
+    Identification as Identification,
+    evaluate as evaluate,
+    identify as identify,
+)
+from .report import (
+    identification_report as identification_report,
+    plot_flight_fit as plot_flight_fit,
+    plot_poles as plot_poles,
+    write_json as write_json,
+)

@@ -1,0 +1,25 @@
+"""Error types raised by fwid.
+
+Every error that comes from the user's input (files, columns, units, excitation) is a
+[`fwid.InputError`][]; the command line turns those into a one-line message and exit code 2.
+"""
+
+
+class FwidError(Exception):
+    """Base class of every error fwid raises on purpose."""
+
+
+class InputError(FwidError, ValueError):
+    """Bad input: the message names what is wrong, where, and how to fix it."""
+
+
+class FlightDataError(InputError):
+    """A flight file (or its sidecar / `vehicle.json`) that cannot be used as it is."""
+
+
+class ExcitationError(InputError):
+    """The data do not excite the model enough to identify its free parameters."""
+
+
+class FitDivergedError(FwidError, RuntimeError):
+    """The estimator failed to converge (the simulation blew up or the cost did not decrease)."""

@@ -1,0 +1,234 @@
+"""Checks on a flight's time histories, run by [`fwid.data.load_flight`][].
+
+Each check raises a [`fwid.FlightDataError`][] with one line that names the file, says what
+is wrong and where, and how to fix it, e.g.
+
+`lon_0.csv: column 'q' has NaN at rows 17, 18 (t=0.085 s); fill or cut these samples`
+
+Rows are 0-based sample indices (the first data row under the header is row 0).
+
+The strict checks apply to the columns of CONTRACTS section 1 (`KNOWN_COLUMNS`) and to the
+columns a model requires; other (extra) columns are kept as they are and never used by fwid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+from jaxtyping import ArrayLike, Float
+
+from .._errors import FlightDataError
+
+#: The columns of CONTRACTS section 1.
+KNOWN_COLUMNS = (
+    "t", "q", "u", "w", "theta", "p", "r", "v", "phi", "psi",
+    "de", "dr", "f", "X", "Y", "Z", "L", "M", "N",
+)  # fmt: skip
+
+#: A flight needs at least this many samples ...
+MIN_SAMPLES = 50
+#: ... and at least this duration [s] to be fitted.
+MIN_DURATION = 1.0
+
+#: Largest relative deviation of a time step from the typical (median) step. Deviations up
+#: to the rounding of the printed time stamps (e.g. 1e-5 s for `t` written with 5 decimals)
+#: are accepted too, as long as they stay below `UNIFORM_RTOL_MAX`.
+UNIFORM_RTOL = 1e-3
+UNIFORM_RTOL_MAX = 0.25
+
+#: Largest plausible magnitude in radians (or rad/s) of angle-like columns; beyond it the
+#: column looks like degrees (or deg/s). Pitch and roll are bounded by pi; the heading by
+#: 2 pi (an unwrapped heading can exceed it: the message says what to do then); rates by
+#: 35 rad/s (2000 deg/s, far beyond any body rate of a flapping-wing MAV); control
+#: deflections by 1 rad (57 deg, beyond any tail deflection).
+DEGREE_LIMITS = {
+    "theta": np.pi,
+    "phi": np.pi,
+    "psi": 2 * np.pi,
+    "p": 35.0,
+    "q": 35.0,
+    "r": 35.0,
+    "de": 1.0,
+    "dr": 1.0,
+}
+
+_MAX_ROWS_LISTED = 5
+
+
+def _rows(idx: np.ndarray) -> str:
+    """`row 3` / `rows 3, 4, 5` / `rows 3, 4, 5, 6, 7 and 12 more`."""
+    shown = ", ".join(str(int(i)) for i in idx[:_MAX_ROWS_LISTED])
+    more = idx.size - _MAX_ROWS_LISTED
+    rows = ("row " if idx.size == 1 else "rows ") + shown
+    return rows + (f" and {more} more" if more > 0 else "")
+
+
+def _at(t: np.ndarray | None, i: int) -> str:
+    if t is None or i >= t.shape[0] or not np.isfinite(t[i]):
+        return ""
+    return f" (t={t[i]:.6g} s)"
+
+
+def _g(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def check_columns(name: str, names: Iterable[str], require: Iterable[str] = ()) -> None:
+    """The time column `t` and every column in `require` are present."""
+    names = list(names)
+    has = ", ".join(names) if names else "none"
+    if "t" not in names:
+        alias = [c for c in names if c.strip().lower() in ("time", "t", "time_s", "t_s", "t [s]")]
+        fix = f"rename '{alias[0]}' to 't'" if alias else "add a time column 't' in seconds"
+        raise FlightDataError(f"{name}: missing time column 't' (columns: {has}); {fix}")
+    missing = [c for c in dict.fromkeys(require) if c not in names]
+    if missing:
+        s, it = ("s", "them") if len(missing) > 1 else ("", "it")
+        cols = ", ".join(repr(c) for c in missing)
+        raise FlightDataError(
+            f"{name}: missing column{s} {cols} needed by this model (columns: {has}); "
+            f"add {it} or choose a model that does not need {it}"
+        )
+
+
+def check_finite(name: str, col: str, x: Float[ArrayLike, " n"], t=None) -> None:
+    """`x` has no NaN (or empty cells) and no infinities."""
+    x = np.asarray(x, dtype=float)
+    bad = ~np.isfinite(x)
+    if not bad.any():
+        return
+    idx = np.flatnonzero(bad)
+    nan = np.isnan(x[idx])
+    what = "NaN" if nan.all() else ("infinite values" if not nan.any() else "NaN/infinite values")
+    t = None if t is None else np.asarray(t, dtype=float)
+    raise FlightDataError(
+        f"{name}: column '{col}' has {what} at {_rows(idx)}{_at(t, int(idx[0]))}; "
+        "fill or cut these samples"
+    )
+
+
+def time_quantum(t: Float[ArrayLike, " n"]) -> float:
+    """The rounding of the printed time stamps: 10**-k for the fewest decimals k that
+    reproduce `t` (0.0 when `t` is not rounded to 12 decimals or fewer)."""
+    t = np.asarray(t, dtype=float)
+    for k in range(13):
+        s = t * 10.0**k
+        if np.max(np.abs(s - np.round(s)), initial=0.0) < 1e-3:
+            return 10.0**-k
+    return 0.0
+
+
+def check_time(name: str, t: Float[ArrayLike, " n"]) -> float:
+    """`t` is strictly increasing with a uniform step; returns the typical step [s]."""
+    t = np.asarray(t, dtype=float)
+    if t.shape[0] < 2:
+        return float("nan")
+    d = np.diff(t)
+    bad = np.flatnonzero(d <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        how = "repeats" if d[i - 1] == 0 else "goes back to"
+        raise FlightDataError(
+            f"{name}: t is not strictly increasing at row {i}: t {how} {t[i]:.6g} s after "
+            f"{t[i - 1]:.6g} s (row {i - 1}); sort the rows by time and remove duplicates"
+        )
+    dt = float(np.median(d))
+    quantum = time_quantum(t)
+    tol = min(max(UNIFORM_RTOL * dt, 1.01 * quantum), UNIFORM_RTOL_MAX * dt)
+    dev = np.abs(d - dt)
+    bad = np.flatnonzero(dev > tol)
+    if bad.size:
+        j = int(bad[0])
+        hint = ""
+        if quantum > UNIFORM_RTOL_MAX * dt:
+            hint = " (t is rounded to {:g} s: write it with more decimals)".format(quantum)
+        raise FlightDataError(
+            f"{name}: t is not uniformly sampled: the step from row {j} to {j + 1} "
+            f"(t={t[j]:.6g} s) is {_g(d[j])} s but the typical step is {_g(dt)} s "
+            f"({bad.size} step{'s' if bad.size > 1 else ''} off by more than "
+            f"{100 * tol / dt:.2g}%){hint}; resample the flight onto a uniform time grid"
+        )
+    return dt
+
+
+def check_length(name: str, t: Float[ArrayLike, " n"]) -> None:
+    """At least `MIN_SAMPLES` samples over at least `MIN_DURATION` seconds."""
+    t = np.asarray(t, dtype=float)
+    n = t.shape[0]
+    duration = float(t[-1] - t[0]) if n else 0.0
+    if n < MIN_SAMPLES or duration < MIN_DURATION * (1 - 1e-9):
+        raise FlightDataError(
+            f"{name}: flight too short to fit: {n} sample{'s' if n != 1 else ''} over "
+            f"{duration:.3g} s; need at least {MIN_SAMPLES} samples and {MIN_DURATION:g} s "
+            "of data (use a longer recording)"
+        )
+
+
+def check_units(name: str, columns: Mapping[str, ArrayLike]) -> None:
+    """Angles, rates and deflections are in radians, not degrees (see `DEGREE_LIMITS`)."""
+    for col, limit in DEGREE_LIMITS.items():
+        if col not in columns:
+            continue
+        x = np.asarray(columns[col], dtype=float)
+        if x.size == 0:
+            continue
+        m = float(np.max(np.abs(x)))
+        if m > limit * (1 + 1e-6):
+            rate = col in ("p", "q", "r")
+            fix = "multiply by pi/180"
+            if col == "psi":
+                fix += " (or, for an unwrapped heading in radians, subtract a multiple of 2*pi)"
+            raise FlightDataError(
+                f"{name}: column '{col}' looks like {'deg/s' if rate else 'degrees'} "
+                f"(max |{col}| = {m:.4g}, above the {limit:.3g} {'rad/s' if rate else 'rad'} "
+                f"plausible); fwid expects {'rad/s' if rate else 'radians'}: {fix}"
+            )
+
+
+def check_frequency(name: str, f: Float[ArrayLike, " n"], t=None) -> None:
+    """The flapping frequency `f` [Hz] is positive and finite."""
+    f = np.asarray(f, dtype=float)
+    check_finite(name, "f", f, t)
+    idx = np.flatnonzero(f <= 0)
+    if idx.size:
+        t = None if t is None else np.asarray(t, dtype=float)
+        raise FlightDataError(
+            f"{name}: column 'f' (flapping frequency, Hz) must be positive but is "
+            f"{_g(f[idx[0]])} at {_rows(idx)}{_at(t, int(idx[0]))}; "
+            "fix or cut these samples"
+        )
+
+
+def check_flight(
+    name: str,
+    t: Float[ArrayLike, " n"],
+    columns: Mapping[str, ArrayLike],
+    require: Iterable[str] = (),
+) -> float:
+    """Every check, in order: columns present, finite values, time grid, length, units,
+    flapping frequency. `columns` holds every column but `t`.
+
+    **Arguments:**
+    - `name`: the file name, used in the messages.
+    - `t`: time [s].
+    - `columns`: the other columns by name.
+    - `require`: columns the caller needs.
+
+    **Returns:** the time step [s].
+
+    Raises a [`fwid.FlightDataError`][] at the first problem found.
+    """
+    require = tuple(require)
+    check_columns(name, ["t", *columns], require)
+    t = np.asarray(t, dtype=float)
+    check_finite(name, "t", t, None)
+    strict = [c for c in columns if c in KNOWN_COLUMNS or c in require]
+    for c in strict:
+        check_finite(name, c, columns[c], t)
+    dt = check_time(name, t)
+    check_length(name, t)
+    check_units(name, {c: columns[c] for c in strict})
+    if "f" in columns:
+        check_frequency(name, columns["f"], t)
+    return dt

@@ -1,0 +1,23 @@
+"""Split flight data into the cycle-averaged and the flapping part (Section III.B, Figure 4).
+
+- [`fwid.decompose.lowpass`][], [`fwid.decompose.highpass`][]: zero-phase Butterworth filters,
+  computed in the frequency domain (differentiable with respect to the cut-off).
+- [`fwid.decompose.decompose`][] -> [`fwid.decompose.Decomposition`][]: noise low-pass (40 Hz),
+  then the split at 5 Hz; [`fwid.decompose.cycle_averaged`][] and
+  [`fwid.decompose.flapping_part`][] do the same on a `fwid.data.Flight`.
+- [`fwid.decompose.estimate_flapping_frequency`][], [`fwid.decompose.flapping_phase`][],
+  [`fwid.decompose.check_flapping_frequency`][]: the flapping frequency and phase driving Eq. (12).
+"""
+
+from ._filters import highpass as highpass, lowpass as lowpass, squared_gain as squared_gain
+from ._frequency import (
+    check_flapping_frequency as check_flapping_frequency,
+    estimate_flapping_frequency as estimate_flapping_frequency,
+    flapping_phase as flapping_phase,
+)
+from ._split import (
+    Decomposition as Decomposition,
+    cycle_averaged as cycle_averaged,
+    decompose as decompose,
+    flapping_part as flapping_part,
+)

@@ -1,0 +1,7 @@
+from ._gauss_newton import DampedGaussNewton as DampedGaussNewton
+from ._output_error import FitResult as FitResult, fit as fit
+from ._start import least_squares_start as least_squares_start
+from ._uncertainty import (
+    coloured_residual_middle as coloured_residual_middle,
+    correlation as correlation,
+)

@@ -1,0 +1,333 @@
+"""Output-error maximum likelihood estimation, Eqs. (10)-(11), minimised by Gauss-Newton."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+from jaxtyping import Array, Bool, Float, Int
+
+from .._errors import ExcitationError, FitDivergedError
+from ..models._greybox import GreyBoxModel
+from ..simulate._experiment import Experiment, stack_experiments
+from ..simulate._simulate import simulate
+from ._gauss_newton import DampedGaussNewton
+from ._start import least_squares_start
+from ._uncertainty import (
+    coloured_residual_middle,
+    correlation,
+    correlation_length,
+    covariance,
+    fisher_information,
+)
+
+
+class FitResult(eqx.Module):
+    """The output of [`fwid.fit`][]: estimates, their uncertainty and the fit's history.
+
+    **Fields:**
+    - `model`: the model with its parameters set to the estimates.
+    - `names`: the free parameters, in the order of `theta`, `std`, `cov`; in a joint fit of
+      several flights the model's `local` parameters (bias terms) are estimated per flight
+      and named `bq@0`, `bq@1`, ... after the flight's index.
+    - `theta`: the estimates of the free parameters.
+    - `std`: standard deviations corrected for coloured residuals (Morelli and Klein, with a
+      Bartlett lag window twice the residuals' correlation length).
+    - `std_cr`: the plain Cramer-Rao standard deviations, `sqrt(diag(M^-1))`.
+    - `cov`: the covariance matrix behind `std`; `corr` its correlation matrix.
+    - `R`: the measurement-noise covariance estimate, Eq. (11).
+    - `cost`: the negative log-likelihood, Eq. (10), at the estimate.
+    - `cost_history`: the cost after each relaxation pass (NaN after the last).
+    - `passes`, `steps`: relaxation passes and Gauss-Newton steps taken.
+    - `converged`: whether the cost and the parameters settled within tolerance.
+    - `start`: the least-squares start values of the free parameters.
+    """
+
+    model: GreyBoxModel
+    names: tuple[str, ...] = eqx.field(static=True)
+    theta: Float[Array, " p"]
+    std: Float[Array, " p"]
+    std_cr: Float[Array, " p"]
+    cov: Float[Array, "p p"]
+    corr: Float[Array, "p p"]
+    R: Float[Array, "ny ny"]
+    cost: Float[Array, ""]
+    cost_history: Float[Array, " passes"]
+    passes: Int[Array, ""]
+    steps: Int[Array, ""]
+    converged: Bool[Array, ""]
+    start: Float[Array, " p"]
+
+    @property
+    def params(self) -> dict:
+        return self.model.params
+
+    def table(self) -> dict[str, dict[str, float]]:
+        """`{name: {value, std, std_cr, rel_std_pct}}`, Table 1's layout."""
+        out = {}
+        for i, k in enumerate(self.names):
+            v, s = float(self.theta[i]), float(self.std[i])
+            out[k] = dict(value=v, std=s, std_cr=float(self.std_cr[i]),
+                          rel_std_pct=100.0 * abs(s / v) if v != 0 else float("inf"))
+        return out
+
+
+def _simulate_batch(model, params, batch: Experiment):
+    """Simulate every experiment of a batch; `params` values are scalars or `(B,)` arrays."""
+    B = batch.t.shape[0]
+    pb = {k: jnp.broadcast_to(v, (B,)) for k, v in params.items()}
+    return jax.vmap(lambda e, p: simulate(model, e, p)[1])(batch, pb)
+
+
+def _raw_residuals(model, params, batch):
+    y = _simulate_batch(model, params, batch)
+    return (batch.z - y) * batch.mask[..., None]
+
+
+def _noise_covariance(v, mask, diagonal: bool, floor):
+    """Eq. (11): `R = 1/N sum_k v_k v_k^T` (or its diagonal), floored to stay invertible."""
+    N = jnp.sum(mask)
+    vv = v.reshape(-1, v.shape[-1])
+    R = vv.T @ vv / N
+    if diagonal:
+        R = jnp.diag(jnp.diag(R))
+    return R + jnp.diag(floor)
+
+
+def _ml_cost(R, N, ny):
+    """Eq. (10) with R from Eq. (11): `N ny / 2 + N/2 ln det R + N ny / 2 ln 2 pi`."""
+    _, logdet = jnp.linalg.slogdet(R)
+    return 0.5 * N * ny + 0.5 * N * logdet + 0.5 * N * ny * jnp.log(2 * jnp.pi)
+
+
+def _free_layout(model: GreyBoxModel, n_local_batch: int):
+    """The layout of the free vector: global names, local names, and every entry's name."""
+    glob = [k for k in model.free if k not in model.local or n_local_batch == 0]
+    loc = [k for k in model.free if k in model.local and n_local_batch > 0]
+    names = glob + [f"{k}@{b}" for k in loc for b in range(n_local_batch)]
+    return glob, loc, names
+
+
+def _merge_batch(model: GreyBoxModel, theta, n_local_batch: int):
+    """Parameter dict from the vector `[global free..., local free x B]` (locals per flight)."""
+    glob, loc, _ = _free_layout(model, n_local_batch)
+    params = dict(model.params)
+    for i, k in enumerate(glob):
+        params[k] = theta[i]
+    for j, k in enumerate(loc):
+        start = len(glob) + j * n_local_batch
+        params[k] = theta[start:start + n_local_batch]
+    return params
+
+
+def _fit_batch(model: GreyBoxModel, s0, scale, batch: Experiment, *, diagonal, max_passes,
+               max_steps, rtol, cost_rtol, n_local_batch=0):
+    """The whole estimator on one (padded) batch of experiments that share the parameters.
+
+    Pure and jit/vmap-able: the relaxation passes are a `lax.while_loop`, each pass an
+    `optimistix.least_squares` Gauss-Newton solve with R fixed (Eqs. 10-11).
+    """
+    ny = batch.z.shape[-1]
+    N = jnp.sum(batch.mask)
+    zstd = jnp.sqrt(jnp.sum((batch.z * batch.mask[..., None]) ** 2, axis=(0, 1)) / N)
+    floor = (1e-9 * zstd + 1e-300) ** 2
+
+    def params_of(s):
+        return _merge_batch(model, s * scale, n_local_batch)
+
+    def whitened(s, Linv):
+        v = _raw_residuals(model, params_of(s), batch)
+        w = v @ Linv.T
+        return jnp.where(jnp.isfinite(w), w, jnp.inf)
+
+    def R_of(s):
+        v = _raw_residuals(model, params_of(s), batch)
+        R = _noise_covariance(v, batch.mask, diagonal, floor)
+        ok = jnp.all(jnp.isfinite(R))
+        fallback = jnp.diag(zstd**2 + floor)
+        return jnp.where(ok, R, fallback)
+
+    solver = DampedGaussNewton(rtol=rtol, atol=1e-13)
+
+    def one_pass(carry):
+        s, R, cost_prev, k, steps, hist, _ = carry
+        Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
+        sol = optx.least_squares(
+            whitened, solver, s, args=Linv, max_steps=max_steps, throw=False,
+        )
+        s_new = sol.value
+        R_new = R_of(s_new)
+        cost = _ml_cost(R_new, N, ny)
+        better = jnp.isfinite(cost)
+        s_new = jnp.where(better, s_new, s)
+        done = better & (jnp.abs(cost - cost_prev) <= cost_rtol * (1.0 + jnp.abs(cost)))
+        hist = hist.at[k].set(cost)
+        return s_new, R_new, cost, k + 1, steps + sol.stats["num_steps"], hist, done
+
+    def cond(carry):
+        *_, k, _, _, done = carry
+        return (k < max_passes) & ~done
+
+    R0 = R_of(s0)
+    hist0 = jnp.full(max_passes, jnp.nan)
+    init = (s0, R0, jnp.inf, jnp.array(0), jnp.array(0), hist0, jnp.array(False))
+    s, R, cost, passes, steps, hist, done = jax.lax.while_loop(cond, one_pass, init)
+
+    # Uncertainty at the estimate: Cramer-Rao, and corrected for coloured residuals.
+    Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
+
+    def per_sample(s):
+        return _raw_residuals(model, params_of(s), batch) @ Linv.T  # (B, n, ny)
+
+    w = per_sample(s)
+    Sw = -jax.jacfwd(per_sample)(s) / scale  # d(whitened y)/d theta: (B, n, ny, p)
+    M = fisher_information(Sw.reshape(-1, Sw.shape[-1]))
+    # Lags never cross from one experiment into the next. Bartlett lag window twice as long
+    # as the residuals' correlation length (at least 2 samples, at most a quarter record).
+    def middle_of(S, v, mask):
+        L = jnp.clip(2 * correlation_length(v, mask), 2, jnp.sum(mask) / 4)
+        return coloured_residual_middle(S, v, mask, L)
+
+    middle = jax.vmap(middle_of)(Sw, w, batch.mask).sum(0)
+    cov_cr = covariance(M)
+    cov_c = covariance(M, middle)
+    return dict(s=s, R=R, cost=cost, passes=passes, steps=steps, hist=hist, converged=done,
+                M=M, cov_cr=cov_cr, cov=cov_c)
+
+
+_fit_batch_jit = eqx.filter_jit(_fit_batch)
+
+
+def _check_excitation(model: GreyBoxModel, exps: Sequence[Experiment], names: Sequence[str]):
+    for e, name in zip(exps, names):
+        u = np.asarray(e.u)
+        still = [model.inputs[j] for j in range(u.shape[1]) if np.ptp(u[:, j]) < 1e-12]
+        if len(still) == u.shape[1] and u.shape[1] > 0:
+            raise ExcitationError(
+                f"{name}: input {', '.join(repr(s) for s in still)} never moves: there is no "
+                "manoeuvre to identify the model from; use a flight with a doublet/3211 input"
+            )
+
+
+def _check_information(result, names, flights):
+    M = np.asarray(result["M"])
+    d = np.sqrt(np.clip(np.diag(M), 0, None))
+    bad = [names[i] for i in range(len(names)) if not np.isfinite(d[i]) or d[i] <= 1e-10 * d.max()]
+    if bad:
+        raise ExcitationError(
+            f"{', '.join(flights)}: the data carry no information on parameter"
+            f"{'s' if len(bad) > 1 else ''} {', '.join(bad)} (too little excitation); fix "
+            "them (`model.with_free(...)`) or add flights whose inputs excite them"
+        )
+
+
+def fit(
+    model: GreyBoxModel,
+    experiments: Experiment | Sequence[Experiment],
+    *,
+    names: Sequence[str] | None = None,
+    start: str | GreyBoxModel = "least-squares",
+    noise: str = "full",
+    max_passes: int = 12,
+    max_steps: int = 60,
+    rtol: float = 1e-10,
+    cost_rtol: float = 1e-10,
+    local_per_flight: bool = True,
+    progress: bool = False,
+) -> FitResult:
+    """Estimate the free parameters of `model` by output-error maximum likelihood.
+
+    The cost is the negative log-likelihood of Eq. (10); the measurement-noise covariance R
+    is relaxed (Eq. 11): fixed R, a Gauss-Newton solve over the parameters (optimistix, with
+    Jacobians by forward-mode autodiff through the diffrax RK4 simulation and step halving),
+    then R updated from the residuals, until the cost settles. Several experiments are fitted
+    together (one parameter set, each integrated from its own initial state).
+
+    **Arguments:**
+    - `model`: the [`fwid.GreyBoxModel`][]; its free parameters are estimated.
+    - `experiments`: one [`fwid.Experiment`][] or a list of them.
+    - `names`: the experiments' names, for messages (default `exp0`, `exp1`, ...).
+    - `start`: `"least-squares"` (equation error, as the paper), `"model"` (the model's
+      current values), or a model whose values to start from.
+    - `noise`: `"full"` R (Eq. 11) or `"diagonal"` (uncorrelated output noise).
+    - `max_passes`, `max_steps`: relaxation passes, Gauss-Newton steps per pass.
+    - `local_per_flight`: with several experiments, estimate the model's `local` parameters
+      (bias terms) separately for each one (named `name@i`); otherwise they are shared.
+    - `progress`: print a line when the fit starts and ends.
+
+    **Returns:** a [`fwid.FitResult`][].
+
+    **Raises:** [`fwid.ExcitationError`][] when the data cannot identify a parameter,
+    [`fwid.FitDivergedError`][] when the cost cannot be made finite.
+    """
+    exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
+    names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    if not model.free:
+        raise ValueError(f"model {model.name!r} has no free parameters to estimate")
+    for e in exps:
+        if e.t.dtype != jnp.float64:
+            raise TypeError("fwid.fit needs float64 arrays: enable jax_enable_x64 (import fwid)")
+    _check_excitation(model, exps, names)
+    t0 = time.perf_counter()
+    if isinstance(start, GreyBoxModel):
+        start_model = model.with_params(start.params)
+    elif start == "least-squares":
+        start_model = least_squares_start(model, exps)
+    elif start == "model":
+        start_model = model
+    else:
+        raise ValueError(f"start must be 'least-squares', 'model' or a model, not {start!r}")
+    n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
+    glob, loc, free_names = _free_layout(model, n_local)
+    theta0 = jnp.concatenate([
+        jnp.stack([start_model.params[k] for k in glob]) if glob else jnp.zeros(0),
+        *[jnp.broadcast_to(start_model.params[k], (n_local,)) for k in loc],
+    ])
+    scale = jnp.where(jnp.abs(theta0) > 0, jnp.abs(theta0), 1.0)
+    batch = stack_experiments(exps)
+    if progress:
+        print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
+              f"{', '.join(names)} ...", flush=True)
+    out = _fit_batch_jit(
+        start_model, theta0 / scale, scale, batch, diagonal=(noise == "diagonal"),
+        max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
+        n_local_batch=n_local,
+    )
+    if not np.isfinite(float(out["cost"])):
+        raise FitDivergedError(
+            f"{', '.join(names)}: the {model.name} fit diverged (the simulation blows up for "
+            "every step tried from the start values); check the units and the trim, or give "
+            "start values (`start=model.with_params(...)`)"
+        )
+    _check_information(out, free_names, names)
+    theta = out["s"] * scale
+    cov = out["cov"]
+    merged = _merge_batch(model, theta, n_local)
+    first = {k: (v[0] if (k in loc and n_local) else v) for k, v in merged.items()}
+    result = FitResult(
+        model=start_model.with_params(first),
+        names=tuple(free_names),
+        theta=theta,
+        std=jnp.sqrt(jnp.diag(cov)),
+        std_cr=jnp.sqrt(jnp.diag(out["cov_cr"])),
+        cov=cov,
+        corr=correlation(cov),
+        R=out["R"],
+        cost=out["cost"],
+        cost_history=out["hist"],
+        passes=out["passes"],
+        steps=out["steps"],
+        converged=out["converged"],
+        start=theta0,
+    )
+    if progress:
+        state = "converged" if bool(result.converged) else "NOT converged"
+        print(f"fwid: {model.name} fit {state} in {int(result.passes)} passes, "
+              f"{int(result.steps)} Gauss-Newton steps, {time.perf_counter() - t0:.1f} s",
+              flush=True)
+    return result

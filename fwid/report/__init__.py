@@ -1,0 +1,8 @@
+from ._figures import plot_flight_fit as plot_flight_fit, plot_poles as plot_poles
+from ._json import identification_report as identification_report, write_json as write_json
+from ._table import (
+    identification_summary as identification_summary,
+    metrics_table as metrics_table,
+    modes_table as modes_table,
+    parameter_table as parameter_table,
+)

@@ -1,0 +1,8 @@
+from ._experiment import (
+    Experiment as Experiment,
+    experiment as experiment,
+    stack_experiments as stack_experiments,
+    unstack_experiments as unstack_experiments,
+)
+from ._simulate import input_at as input_at, simulate as simulate, simulate_forces as simulate_forces
+from ._rk4 import RK4 as RK4

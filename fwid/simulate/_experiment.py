@@ -1,0 +1,144 @@
+"""`Experiment`: what the estimator and the simulator need of one flight, as arrays."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from .._errors import FlightDataError
+
+
+class Experiment(eqx.Module):
+    """One manoeuvre, ready to simulate: uniform time, inputs, measured outputs, initial state.
+
+    **Fields:**
+    - `t`: time [s], uniform step.
+    - `u`: inputs, `(n, inputs)` (perturbations for the DelFly models).
+    - `z`: measured outputs, `(n, outputs)`.
+    - `x0`: initial state.
+    - `consts`: per-flight constants the model reads (mass, inertia, trim).
+    - `mask`: 1 on real samples, 0 on padding (see [`fwid.stack_experiments`][]).
+    - `forces`: measured (reconstructed) aerodynamic forces `(n, force_names)` or `None`.
+    """
+
+    t: Float[Array, " n"]
+    u: Float[Array, "n nu"]
+    z: Float[Array, "n ny"]
+    x0: Float[Array, " nx"]
+    consts: dict[str, Float[Array, ""]]
+    mask: Float[Array, " n"]
+    forces: Float[Array, "n nf"] | None = None
+
+    def __init__(self, t, u, z, x0=None, consts=None, mask=None, forces=None):
+        self.t = jnp.asarray(t, dtype=float)
+        u = jnp.asarray(u, dtype=float)
+        self.u = u[:, None] if u.ndim == 1 else u
+        z = jnp.asarray(z, dtype=float)
+        self.z = z[:, None] if z.ndim == 1 else z
+        self.x0 = self.z[0] if x0 is None else jnp.asarray(x0, dtype=float)
+        self.consts = {k: jnp.asarray(v, dtype=float) for k, v in (consts or {}).items()}
+        self.mask = jnp.ones(self.t.shape) if mask is None else jnp.asarray(mask, dtype=float)
+        self.forces = None if forces is None else jnp.asarray(forces, dtype=float)
+
+    @property
+    def dt(self):
+        return self.t[1] - self.t[0]
+
+    @property
+    def n(self) -> int:
+        return int(self.t.shape[-1])
+
+
+def experiment(flight, model, *, x0: str = "first") -> Experiment:
+    """Build an [`fwid.Experiment`][] from a [`fwid.Flight`][] for `model`.
+
+    States, outputs and inputs are taken as perturbations from the flight's trim (the paper's
+    Delta quantities); the model's constants come from the vehicle and the trim; the measured
+    forces are taken when the flight has them (for the least-squares start).
+
+    **Arguments:**
+    - `flight`: the flight (usually cycle-averaged first, see [`fwid.cycle_averaged`][]).
+    - `model`: the [`fwid.GreyBoxModel`][].
+    - `x0`: `"first"` takes the initial state from the first sample of the measured states.
+    """
+    cols = list(model.inputs) + list(model.outputs)
+    if not model.outputs_are_states:
+        cols += list(model.states)
+    flight.require(dict.fromkeys(cols))
+    u = jnp.stack([flight.perturbation(c) for c in model.inputs], axis=-1)
+    z = jnp.stack([flight.perturbation(c) for c in model.outputs], axis=-1)
+    xs = jnp.stack([flight.perturbation(c) for c in model.states], axis=-1)
+    consts = {}
+    vehicle = flight.vehicle.as_dict() if flight.vehicle is not None else {}
+    for k in model.constants:
+        if k in vehicle:
+            consts[k] = vehicle[k]
+        elif k in flight.trim:
+            consts[k] = flight.trim[k]
+        elif k in ("mass", "Ix", "Iy", "Iz", "Ixz", "g"):
+            raise FlightDataError(
+                f"{flight.name}: the {model.name} model needs the vehicle's '{k}' but no "
+                "vehicle.json was found beside the flight; add one (CONTRACTS section 1)"
+            )
+        else:
+            raise FlightDataError(
+                f"{flight.name}: the {model.name} model needs the trim value '{k}'; give "
+                f"it in the sidecar {flight.name.rsplit('.', 1)[0]}.json as "
+                f'{{"trim": {{"{k}": ...}}}} or add the column {k[:-1]!r}'
+            )
+    forces = None
+    if model.force_names and all(c in flight for c in model.force_names):
+        forces = jnp.stack([flight.perturbation(c) for c in model.force_names], axis=-1)
+    return Experiment(flight.t, u, z, xs[0], consts, forces=forces)
+
+
+def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Experiment:
+    """Pad experiments to a common length and stack them along a leading batch axis.
+
+    Time continues on the same uniform grid, inputs hold their last value and the mask is 0
+    on the padding, so a padded sample never enters a cost or a metric.
+    """
+    n = max(e.n for e in exps) if n is None else n
+    keys = sorted(set().union(*(e.consts for e in exps)))
+    have_forces = all(e.forces is not None for e in exps)
+
+    def pad(e: Experiment) -> Experiment:
+        k = n - e.n
+        t = np.asarray(e.t)
+        dt = t[1] - t[0]
+        tpad = np.concatenate([t, t[-1] + dt * np.arange(1, k + 1)])
+
+        def hold(a):
+            a = np.asarray(a)
+            return np.concatenate([a, np.repeat(a[-1:], k, axis=0)], axis=0)
+
+        consts = {key: e.consts.get(key, np.nan) for key in keys}
+        mask = np.concatenate([np.asarray(e.mask), np.zeros(k)])
+        return Experiment(tpad, hold(e.u), hold(e.z), e.x0, consts, mask,
+                          hold(e.forces) if have_forces else None)
+
+    padded = [pad(e) for e in exps]
+    return Experiment(
+        jnp.stack([e.t for e in padded]), jnp.stack([e.u for e in padded]),
+        jnp.stack([e.z for e in padded]), jnp.stack([e.x0 for e in padded]),
+        {key: jnp.stack([e.consts[key] for e in padded]) for key in keys},
+        jnp.stack([e.mask for e in padded]),
+        jnp.stack([e.forces for e in padded]) if have_forces else None,
+    )
+
+
+def unstack_experiments(batch: Experiment) -> list[Experiment]:
+    """The inverse of [`fwid.stack_experiments`][] (padding removed)."""
+    out = []
+    for i in range(batch.t.shape[0]):
+        n = int(np.asarray(batch.mask[i]).sum())
+        out.append(Experiment(
+            batch.t[i, :n], batch.u[i, :n], batch.z[i, :n], batch.x0[i],
+            {k: v[i] for k, v in batch.consts.items()}, None,
+            None if batch.forces is None else batch.forces[i, :n]))
+    return out
+
