@@ -72,6 +72,7 @@ from ._identify import (
 )
 from .report import (
     identification_report as identification_report,
+    plot_decomposition as plot_decomposition,
     plot_flight_fit as plot_flight_fit,
     plot_poles as plot_poles,
     write_json as write_json,

@@ -76,11 +76,20 @@ def get_model(model: str | GreyBoxModel) -> GreyBoxModel:
         ) from None
 
 
-def averaged(flight: Flight, model: GreyBoxModel, cutoff: float, noise_cutoff: float):
-    """The flight's cycle-averaged part as an [`fwid.Experiment`][] for `model`."""
-    cols = list(model.inputs) + list(model.outputs) + list(model.force_names)
-    flight.require(dict.fromkeys(c for c in cols if c not in model.force_names))
-    return experiment(cycle_averaged(flight, cutoff=cutoff, noise_cutoff=noise_cutoff), model)
+def averaged(flight: Flight, model: GreyBoxModel, cutoff: float = 5.0,
+             noise_cutoff: float = 40.0, edge: float = 0.2) -> Experiment:
+    """The flight's cycle-averaged part as an [`fwid.Experiment`][] for `model`.
+
+    The zero-phase split is least reliable in the first and last few tenths of a second (the
+    filter sees past the record's ends), so `edge` seconds are dropped at each end after
+    filtering; the initial state is then the first remaining cycle-averaged sample.
+    """
+    flight.require(dict.fromkeys(list(model.inputs) + list(model.outputs)))
+    avg = cycle_averaged(flight, cutoff=cutoff, noise_cutoff=noise_cutoff)
+    k = int(round(edge / flight.dt))
+    if flight.n - 2 * k < 50:
+        k = 0
+    return experiment(avg.slice(k, flight.n - k) if k else avg, model)
 
 
 def evaluate(

@@ -82,7 +82,11 @@ def load_vehicle(path: PathLike) -> Vehicle:
                 values[key] = _VEHICLE_DEFAULTS[key]
                 continue
             close = [k for k in data if isinstance(k, str) and k.lower() == key.lower()]
-            fix = f"rename '{close[0]}' to '{key}'" if close else f"add it (expected {_VEHICLE_SHAPE})"
+            fix = (
+                f"rename '{close[0]}' to '{key}'"
+                if close
+                else f"add it (expected {_VEHICLE_SHAPE})"
+            )
             raise FlightDataError(f"{path}: missing key '{key}'; {fix}")
         value = _number(data[key])
         if value is None:
@@ -134,7 +138,15 @@ def _read_csv(path: Path, name: str, require: tuple[str, ...]) -> dict[str, np.n
             "text file"
         ) from None
     lines = text.splitlines()
-    h = next((i for i, ln in enumerate(lines) if ln.strip()), None)
+    # The header: the first non-blank line, skipping leading '#' comments without commas.
+    h = next(
+        (
+            i
+            for i, ln in enumerate(lines)
+            if ln.strip() and not (ln.lstrip().startswith("#") and "," not in ln)
+        ),
+        None,
+    )
     if h is None:
         raise FlightDataError(f"{name}: file is empty; expected a header row and data rows")
     header = _split_header(lines[h])
@@ -262,7 +274,9 @@ def _read_sidecar(path: Path) -> tuple[dict[str, float], int | None]:
             )
         v = _number(value)
         if v is None:
-            raise FlightDataError(f"{side}: trim value '{key}' must be a finite number, got {value!r}")
+            raise FlightDataError(
+                f"{side}: trim value '{key}' must be a finite number, got {value!r}"
+            )
         trim[key] = v
     first = data.get("first_input")
     if first is not None and (isinstance(first, bool) or not isinstance(first, int) or first < 0):

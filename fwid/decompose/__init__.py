@@ -9,15 +9,13 @@
   [`fwid.decompose.check_flapping_frequency`][]: the flapping frequency and phase driving Eq. (12).
 """
 
-from ._filters import highpass as highpass, lowpass as lowpass, squared_gain as squared_gain
-from ._frequency import (
-    check_flapping_frequency as check_flapping_frequency,
-    estimate_flapping_frequency as estimate_flapping_frequency,
-    flapping_phase as flapping_phase,
-)
-from ._split import (
-    Decomposition as Decomposition,
-    cycle_averaged as cycle_averaged,
-    decompose as decompose,
-    flapping_part as flapping_part,
-)
+from ._filters import highpass as highpass
+from ._filters import lowpass as lowpass
+from ._filters import squared_gain as squared_gain
+from ._frequency import check_flapping_frequency as check_flapping_frequency
+from ._frequency import estimate_flapping_frequency as estimate_flapping_frequency
+from ._frequency import flapping_phase as flapping_phase
+from ._split import Decomposition as Decomposition
+from ._split import cycle_averaged as cycle_averaged
+from ._split import decompose as decompose
+from ._split import flapping_part as flapping_part

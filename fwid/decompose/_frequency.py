@@ -31,7 +31,7 @@ _HALF_WIDTH = 0.2
 _FLOOR = 3.0
 
 
-@ft.lru_cache(maxsize=None)
+@ft.cache
 def _window(n: int) -> np.ndarray:
     return scipy.signal.windows.tukey(n, alpha=0.1)
 
@@ -68,7 +68,8 @@ def _estimate_1d(x, dt, band, oversample):
 
     # Parabolic interpolation of the log spectrum around the peak bin.
     km, kp = jnp.maximum(k1 - 1, 0), jnp.minimum(k1 + 1, m // 2)
-    a, b, c = (jnp.log(power[k] + 1e-300) for k in (km, k1, kp))
+    tiny = jnp.finfo(power.dtype).tiny
+    a, b, c = (jnp.log(power[k] + tiny) for k in (km, k1, kp))
     denom = a - 2 * b + c
     delta = jnp.where(denom < 0, 0.5 * (a - c) / jnp.where(denom < 0, denom, -1.0), 0.0)
     f_peak = (k1 + jnp.clip(delta, -0.5, 0.5)) * df
@@ -134,8 +135,8 @@ def flapping_phase(
 ) -> Float[Array, "*channels n"]:
     """The flapping phase `phi(t) = phase0 + int_0^t 2 pi f(s) ds` (trapezoidal rule).
 
-    The time-varying model of Eq. (12), `sum_n a_n sin(n phi) + b_n cos(n phi)`, driven by this phase
-    stays in step with a drifting flapping frequency; for constant `f` it is Eq. (12) exactly
+    The time-varying model of Eq. (12), `sum_n a_n sin(n phi) + b_n cos(n phi)`, driven by this
+    phase stays in step with a drifting flapping frequency; for constant `f` it is Eq. (12) exactly
     (`phi = 2 pi f t`). Exact for a piecewise-linear `f`. Jit-able, vmap-able, differentiable.
 
     **Arguments:**
@@ -182,8 +183,8 @@ def check_flapping_frequency(
     **Returns:** a one-line message giving both frequencies and their difference.
 
     **Raises:** `fwid.FlightDataError` if `f_column` is not finite and positive, or if the two
-    frequencies differ by more than `tolerance` (the message suggests the likely cause: `f` in rad/s,
-    a harmonic, or a column that does not belong to the signal).
+    frequencies differ by more than `tolerance` (the message suggests the likely cause: `f` in
+    rad/s, a harmonic, or a column that does not belong to the signal).
     """
     where = f"{name}: " if name else ""
     f_np = np.asarray(f_column, dtype=float)

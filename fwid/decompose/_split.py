@@ -76,6 +76,7 @@ def decompose(
     noise_order: int = 4,
     split_order: int = 6,
     skip: Sequence[str] = SKIPPED,
+    pad: str = "hybrid",
 ) -> Decomposition:
     """Split each column into its cycle-averaged and flapping parts (Section III.B).
 
@@ -94,13 +95,18 @@ def decompose(
     - `split_cutoff`: cut-off [Hz] between the cycle-averaged and the flapping part (paper: 5 Hz).
     - `noise_order`: Butterworth order of the noise filter (static, default 4). Note that a
       zero-phase filter halves the amplitude *at* its cut-off: with 40 Hz and order 4 a third
-      harmonic at 37.5 Hz keeps about 63 % of its amplitude, at 39 Hz about 55 % (the paper's compromise
-      between noise and flapping content); raise `noise_cutoff` or `noise_order` to keep more.
+      harmonic at 37.5 Hz keeps about 63 % of its amplitude, at 39 Hz about 55 % (the paper's
+      compromise between noise and flapping content); raise `noise_cutoff` or `noise_order` to
+      keep more.
     - `split_order`: Butterworth order of the split (static, default 6: the zero-phase response
       falls 240 dB/decade, so a flapping line at 11 Hz leaks 8e-5 of its amplitude into the
       cycle-averaged part and body motion at 2 Hz leaks 2e-5 into the flapping part, while the
       step response rings by ~8 % (order 4: 1.8e-3, 7e-4 and ~7 %)).
     - `skip`: columns left out (default `t` and `f`: time, and the flapping frequency, an input).
+    - `pad`: how the records are extended past their ends (static), see
+      [`fwid.decompose.lowpass`][]: the default `"hybrid"` continues the slow part by odd and the
+      flapping part by even reflection, so neither part is thrown off at the ends by the other;
+      `"odd"` reproduces `filtfilt` (and the paper's processing) more literally.
 
     **Returns:** a [`fwid.decompose.Decomposition`][].
 
@@ -120,16 +126,17 @@ def decompose(
         check_cutoff(noise_cutoff, dt, "noise cut-off")
         fn, fs = _concrete(noise_cutoff), _concrete(split_cutoff)
         if fn is not None and fs is not None and not fs < fn:
-            raise InputError(
-                f"split cut-off {fs:g} Hz must lie below the noise cut-off {fn:g} Hz"
-            )
+            raise InputError(f"split cut-off {fs:g} Hz must lie below the noise cut-off {fn:g} Hz")
     noise = jnp.asarray(noise_cutoff, dtype=float) if use_noise else None
     split = jnp.asarray(split_cutoff, dtype=float)
     if not names:
         return Decomposition({}, {}, noise, split, noise_order, split_order)
     stacked = jnp.stack(arrays)
-    filtered = lowpass(stacked, dt, noise, order=noise_order) if use_noise else stacked
-    averaged = lowpass(filtered, dt, split, order=split_order)
+    if use_noise:
+        filtered = lowpass(stacked, dt, noise, order=noise_order, pad=pad)
+    else:
+        filtered = stacked
+    averaged = lowpass(filtered, dt, split, order=split_order, pad=pad)
     flapping = filtered - averaged
     return Decomposition(
         averaged=dict(zip(names, averaged)),
@@ -147,7 +154,7 @@ def _flight_dt(flight: Flight):
     return flight.dt
 
 
-def _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order) -> Decomposition:
+def _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order, pad) -> Decomposition:
     if flight.t.shape[-1] < 2:
         raise InputError(f"{flight.name}: needs at least two samples to filter")
     return decompose(
@@ -157,6 +164,7 @@ def _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order) -> Decom
         split_cutoff=cutoff,
         noise_order=noise_order,
         split_order=order,
+        pad=pad,
     )
 
 
@@ -167,6 +175,7 @@ def cycle_averaged(
     noise_cutoff: float | Float[ArrayLike, ""] | None = 40.0,
     order: int = 6,
     noise_order: int = 4,
+    pad: str = "hybrid",
 ) -> Flight:
     """The flight with every column replaced by its cycle-averaged part (Sections III.B, IV.A).
 
@@ -176,12 +185,12 @@ def cycle_averaged(
     and the other fields are kept.
 
     **Arguments:** `flight`, and `cutoff` (the split, 5 Hz), `noise_cutoff`, `order`,
-    `noise_order` as `split_cutoff`, `noise_cutoff`, `split_order`, `noise_order` of
+    `noise_order`, `pad` as `split_cutoff`, `noise_cutoff`, `split_order`, `noise_order`, `pad` of
     [`fwid.decompose.decompose`][].
 
     **Returns:** a new `Flight`.
     """
-    parts = _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order)
+    parts = _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order, pad)
     return flight.with_columns(**parts.averaged)
 
 
@@ -192,6 +201,7 @@ def flapping_part(
     noise_cutoff: float | Float[ArrayLike, ""] | None = 40.0,
     order: int = 6,
     noise_order: int = 4,
+    pad: str = "hybrid",
 ) -> Flight:
     """The flight with every column replaced by its flapping part (Sections III.B, V.A).
 
@@ -203,7 +213,7 @@ def flapping_part(
 
     **Returns:** a new `Flight`.
     """
-    parts = _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order)
+    parts = _decompose_flight(flight, cutoff, noise_cutoff, order, noise_order, pad)
     out = flight.with_columns(**parts.flapping)
     trim = dict(flight.trim)
     for k in parts.names:

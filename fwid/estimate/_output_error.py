@@ -125,34 +125,44 @@ def _merge_batch(model: GreyBoxModel, theta, n_local_batch: int):
     return params
 
 
-def _fit_batch(model: GreyBoxModel, s0, scale, batch: Experiment, *, diagonal, max_passes,
+def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_passes,
                max_steps, rtol, cost_rtol, n_local_batch=0):
     """The whole estimator on one (padded) batch of experiments that share the parameters.
 
     Pure and jit/vmap-able: the relaxation passes are a `lax.while_loop`, each pass an
-    `optimistix.least_squares` Gauss-Newton solve with R fixed (Eqs. 10-11).
+    `optimistix.least_squares` Gauss-Newton solve with R fixed (Eqs. 10-11). The solver works
+    on scaled parameters `s = theta / scale`, `scale` being the inverse norm of each column of
+    the whitened Jacobian at the start, so every `s` has unit sensitivity and the convergence
+    test treats all parameters alike, however small or poorly determined.
     """
     ny = batch.z.shape[-1]
     N = jnp.sum(batch.mask)
     zstd = jnp.sqrt(jnp.sum((batch.z * batch.mask[..., None]) ** 2, axis=(0, 1)) / N)
     floor = (1e-9 * zstd + 1e-300) ** 2
 
+    def raw(theta):
+        return _raw_residuals(model, _merge_batch(model, theta, n_local_batch), batch)
+
+    def R_of(theta):
+        R = _noise_covariance(raw(theta), batch.mask, diagonal, floor)
+        ok = jnp.all(jnp.isfinite(R))
+        return jnp.where(ok, R, jnp.diag(zstd**2 + floor))
+
+    R0 = R_of(theta0)
+    Linv0 = jnp.linalg.inv(jnp.linalg.cholesky(R0))
+    J0 = jax.jacfwd(lambda th: (raw(th) @ Linv0.T).ravel())(theta0)
+    colnorm = jnp.sqrt(jnp.sum(jnp.where(jnp.isfinite(J0), J0, 0.0) ** 2, axis=0))
+    scale = jnp.where(colnorm > 0, 1.0 / colnorm, jnp.maximum(jnp.abs(theta0), 1.0))
+    s0 = theta0 / scale
+
     def params_of(s):
         return _merge_batch(model, s * scale, n_local_batch)
 
     def whitened(s, Linv):
-        v = _raw_residuals(model, params_of(s), batch)
-        w = v @ Linv.T
+        w = (raw(s * scale)) @ Linv.T
         return jnp.where(jnp.isfinite(w), w, jnp.inf)
 
-    def R_of(s):
-        v = _raw_residuals(model, params_of(s), batch)
-        R = _noise_covariance(v, batch.mask, diagonal, floor)
-        ok = jnp.all(jnp.isfinite(R))
-        fallback = jnp.diag(zstd**2 + floor)
-        return jnp.where(ok, R, fallback)
-
-    solver = DampedGaussNewton(rtol=rtol, atol=1e-13)
+    solver = DampedGaussNewton(rtol=rtol, atol=1e-9)
 
     def one_pass(carry):
         s, R, cost_prev, k, steps, hist, _ = carry
@@ -161,7 +171,7 @@ def _fit_batch(model: GreyBoxModel, s0, scale, batch: Experiment, *, diagonal, m
             whitened, solver, s, args=Linv, max_steps=max_steps, throw=False,
         )
         s_new = sol.value
-        R_new = R_of(s_new)
+        R_new = R_of(s_new * scale)
         cost = _ml_cost(R_new, N, ny)
         better = jnp.isfinite(cost)
         s_new = jnp.where(better, s_new, s)
@@ -173,7 +183,6 @@ def _fit_batch(model: GreyBoxModel, s0, scale, batch: Experiment, *, diagonal, m
         *_, k, _, _, done = carry
         return (k < max_passes) & ~done
 
-    R0 = R_of(s0)
     hist0 = jnp.full(max_passes, jnp.nan)
     init = (s0, R0, jnp.inf, jnp.array(0), jnp.array(0), hist0, jnp.array(False))
     s, R, cost, passes, steps, hist, done = jax.lax.while_loop(cond, one_pass, init)
@@ -196,7 +205,7 @@ def _fit_batch(model: GreyBoxModel, s0, scale, batch: Experiment, *, diagonal, m
     middle = jax.vmap(middle_of)(Sw, w, batch.mask).sum(0)
     cov_cr = covariance(M)
     cov_c = covariance(M, middle)
-    return dict(s=s, R=R, cost=cost, passes=passes, steps=steps, hist=hist, converged=done,
+    return dict(theta=s * scale, R=R, cost=cost, passes=passes, steps=steps, hist=hist, converged=done,
                 M=M, cov_cr=cov_cr, cov=cov_c)
 
 
@@ -288,13 +297,12 @@ def fit(
         jnp.stack([start_model.params[k] for k in glob]) if glob else jnp.zeros(0),
         *[jnp.broadcast_to(start_model.params[k], (n_local,)) for k in loc],
     ])
-    scale = jnp.where(jnp.abs(theta0) > 0, jnp.abs(theta0), 1.0)
     batch = stack_experiments(exps)
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
               f"{', '.join(names)} ...", flush=True)
     out = _fit_batch_jit(
-        start_model, theta0 / scale, scale, batch, diagonal=(noise == "diagonal"),
+        start_model, theta0, batch, diagonal=(noise == "diagonal"),
         max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
         n_local_batch=n_local,
     )
@@ -305,7 +313,7 @@ def fit(
             "start values (`start=model.with_params(...)`)"
         )
     _check_information(out, free_names, names)
-    theta = out["s"] * scale
+    theta = out["theta"]
     cov = out["cov"]
     merged = _merge_batch(model, theta, n_local)
     first = {k: (v[0] if (k in loc and n_local) else v) for k, v in merged.items()}

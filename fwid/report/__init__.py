@@ -1,3 +1,4 @@
+from ._decomposition_plot import plot_decomposition as plot_decomposition
 from ._figures import plot_flight_fit as plot_flight_fit, plot_poles as plot_poles
 from ._json import identification_report as identification_report, write_json as write_json
 from ._table import (

@@ -25,7 +25,9 @@ def _amplitude_spectrum(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarra
 def _as_1d(value, what: str) -> np.ndarray:
     arr = np.asarray(value, dtype=float)
     if arr.ndim != 1:
-        raise InputError(f"plot_decomposition: {what} must be one time history, got shape {arr.shape}")
+        raise InputError(
+            f"plot_decomposition: {what} must be one time history, got shape {arr.shape}"
+        )
     return arr
 
 
@@ -50,7 +52,8 @@ def plot_decomposition(
     **Arguments:**
 
     - `t`: time [s], uniformly sampled.
-    - `raw`: the measurements before filtering, by name (a dict, or a `fwid.data.Flight`), or `None`.
+    - `raw`: the measurements before filtering, by name (a dict or a `fwid.data.Flight`), or
+      `None`.
     - `decomposition`: a [`fwid.decompose.Decomposition`][] of the same samples.
     - `names`: the signals to plot, e.g. `("X", "Y", "Z")`.
     - `path`: if given, the figure is also written there (format from the suffix, e.g. `.png`).
@@ -95,9 +98,11 @@ def plot_decomposition(
         ax_flap.plot(t, flapping, color=_COLOURS["flapping"], lw=0.8, label="flapping")
         ax_flap.axhline(0.0, color="0.5", lw=0.5)
 
-        ax_spec.axvspan(split, nyquist, color="0.9", zorder=0, label=f"flapping band (> {split:g} Hz)")
+        band = f"flapping band (> {split:g} Hz)"
+        ax_spec.axvspan(split, nyquist, color="0.9", zorder=0, label=band)
         if noise is not None:
-            ax_spec.axvline(noise, color="0.4", ls="--", lw=0.8, label=f"noise cut-off {noise:g} Hz")
+            label = f"noise cut-off {noise:g} Hz"
+            ax_spec.axvline(noise, color="0.4", ls="--", lw=0.8, label=label)
         spectra = [("filtered", filtered), ("averaged", averaged), ("flapping", flapping)]
         if measured is not None:
             spectra.insert(0, ("raw", measured))

@@ -1,0 +1,54 @@
+"""Embedded DelFly-like flight simulator: fwid's default data (there is no public DelFly data).
+
+An independent numpy implementation of the paper's combined model (Eqs. 7-9 with the
+cycle-averaged aerodynamics Eqs. 1-6 of Tables 1 and 4, and the flapping Fourier series
+Eq. 12 of Table 7, superposed as in Eqs. 13-15), with realistic measurement: rippling
+control surfaces, sensor noise, and loads reconstructed from the measured motion. Flights are
+written as in CONTRACTS section 1; `effect` injects an unmodelled effect (section 4).
+"""
+
+from ._delfly import (
+    ALL_PARAMS as ALL_PARAMS,
+    DELFLY as DELFLY,
+    FLAP_LAT_PARAMS as FLAP_LAT_PARAMS,
+    FLAP_LON_PARAMS as FLAP_LON_PARAMS,
+    FORCES as FORCES,
+    LAT_PARAMS as LAT_PARAMS,
+    LON_PARAMS as LON_PARAMS,
+    STATES as STATES,
+    DelFly as DelFly,
+    lat_matrices as lat_matrices,
+    lon_matrices as lon_matrices,
+    state_space as state_space,
+)
+from ._effects import (
+    EFFECT_COEFFICIENTS as EFFECT_COEFFICIENTS,
+    EFFECTS as EFFECTS,
+    Effect as Effect,
+)
+from ._inputs import (
+    DEFAULT_UNIT as DEFAULT_UNIT,
+    INPUTS as INPUTS,
+    doublet as doublet,
+    input_211 as input_211,
+    input_3211 as input_3211,
+    make_input as make_input,
+    pulse as pulse,
+)
+from ._simulate import (
+    COLUMNS as COLUMNS,
+    DEFAULT_AMPLITUDE as DEFAULT_AMPLITUDE,
+    NOISE as NOISE,
+    FlapFrequency as FlapFrequency,
+    derivative as derivative,
+    flapping_loads as flapping_loads,
+    reconstruct_loads as reconstruct_loads,
+    simulate_flight as simulate_flight,
+)
+from ._write import (
+    INPUT_CYCLE as INPUT_CYCLE,
+    write_csv as write_csv,
+    write_flights as write_flights,
+    write_sidecar as write_sidecar,
+    write_vehicle as write_vehicle,
+)

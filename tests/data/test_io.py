@@ -104,8 +104,8 @@ def test_extra_columns_are_kept(tmp_path):
 
 
 def test_tolerant_header_and_layout(tmp_path):
-    # BOM, '# ' before the header, spaces and quotes in names, CRLF, a trailing comma,
-    # comment and blank lines between rows
+    # BOM, a leading comment, '# ' before the header, spaces and quotes in names, CRLF,
+    # a trailing comma, comment and blank lines between rows
     c = lon_flight()
     names = list(c)
     rows = [",".join(f"{c[k][i]:.10g}" for k in names) + "," for i in range(800)]
@@ -113,7 +113,8 @@ def test_tolerant_header_and_layout(tmp_path):
     rows.insert(500, "")
     header = "# " + ", ".join(f'"{k}"' for k in names) + ","
     path = tmp_path / "messy.csv"
-    path.write_bytes(("\ufeff" + "\r\n".join([header, *rows]) + "\r\n").encode("utf-8"))
+    lines = ["# DelFly II flight 7", header, *rows]
+    path.write_bytes(("\ufeff" + "\r\n".join(lines) + "\r\n").encode("utf-8"))
     f = load_flight(path)
     assert set(f.columns) == set(names) - {"t"}
     assert f.n == 800
@@ -175,7 +176,8 @@ def test_sidecar_not_json(tmp_path):
 
 
 def test_load_vehicle_defaults(tmp_path):
-    v = load_vehicle(write_json(tmp_path / "vehicle.json", {"mass": 0.02, "Ix": 1, "Iy": 2, "Iz": 3}))
+    content = {"mass": 0.02, "Ix": 1, "Iy": 2, "Iz": 3}
+    v = load_vehicle(write_json(tmp_path / "vehicle.json", content))
     assert v.as_dict() == {"mass": 0.02, "Ix": 1.0, "Iy": 2.0, "Iz": 3.0, "Ixz": 0.0, "g": 9.81}
     assert v.mass.dtype == jnp.float64
 

@@ -39,6 +39,16 @@ def test_first_input_ignores_flapping_ripple(ripple, amp, f_flap, t_input):
     assert abs(i - _expected(t_input, 200.0)) <= 2
 
 
+@pytest.mark.parametrize("t_input", [0.6, 1.37, 2.11])
+def test_first_input_with_drifting_flapping_frequency(t_input):
+    # flapping at 12.5 -> 13.3 Hz over the flight, with a second harmonic, ripple 2x input
+    c = lon_flight(rate=1000.0, ripple=0.0, amp=0.05, t_input=t_input, shape="211")
+    t = c["t"]
+    phase = 2 * np.pi * (12.5 * t + 0.1 * t**2)
+    de = c["de"] + 0.1 * (np.sin(phase) + 0.3 * np.sin(2 * phase + 1.0))
+    assert abs(first_input_index(t, de) - _expected(t_input, 1000.0)) <= 3
+
+
 def test_first_input_is_not_the_ripple_onset():
     # Without the smoothing, the ripple (4x the input) departs from the level at once.
     c = lon_flight(ripple=0.2, amp=0.05, t_input=2.0)

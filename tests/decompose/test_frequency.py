@@ -1,11 +1,11 @@
 """Flapping frequency estimate, flapping phase and the check of a measured `f` column."""
 
-import fwid  # noqa: F401  (turns on float64)
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import fwid  # noqa: F401  (turns on float64)
 from fwid import FlightDataError
 from fwid.decompose import check_flapping_frequency, estimate_flapping_frequency, flapping_phase
 

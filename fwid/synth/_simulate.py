@@ -1,0 +1,502 @@
+"""Simulate one DelFly flight: the paper's combined model (Sec. VI, Eqs. 13-15 with Eqs. 7-9)
+plus realistic measurement: rippling control surfaces, sensor noise, and aerodynamic loads
+reconstructed from the measured motion.
+
+Independent numpy implementation (the "truth" fwid's estimator is tested against).
+
+**Dynamics.** Nine perturbation states `x = [dq du dw dtheta dp dr dv dphi dpsi]` (Eq. 7,
+Eqs. 8-9 side by side, always both axes, coupled only through an injected effect):
+
+    x' = K x + G dF,   dF = Fx x + Fu u_eff  (Eqs. 1-6, cycle-averaged)
+                          + gain(xc) F_TV(phi_f)  (Eq. 12, flapping)
+                          + extra(xc, u_eff)     (injected effect, `_effects.py`)
+
+integrated by superposition as `x = xc + xo`: `xc`, the cycle-averaged states, driven by the
+(commanded) input and the effect terms; `xo`, the response to the flapping loads, started on
+its periodic orbit (`periodic_state`). The model is linear, so this is the same as
+integrating `x` (to rounding), and it lets the injected effects act on the cycle-averaged
+states, as the effect catalogue describes them, without rectifying the flapping oscillation
+into spurious trim shifts.
+
+with `K` the gravity/trim-velocity/kinematic terms, `G` the inverse mass/inertia (with
+`Ic = Ix Iz - Ixz^2` for roll/yaw) and `dpsi' = dr / cos(theta0)` (Eq. 9). The flapping
+loads use the flapping phase `phi_f(t) = phase0 + integral of 2 pi f dt` (not `2 pi f t`:
+the frequency varies), `F_TV = sum_n a_n sin(n phi_f) + b_n cos(n phi_f)`, n = 1..3.
+
+**Integration.** Classical RK4 with a fixed step `dt / substeps` (`dt = 1 / rate`). The
+control input is the sampled commanded (cycle-averaged) deflection, linearly interpolated
+between samples (so `(u_k + u_k+1) / 2` at RK4 midpoints); the flapping loads are
+evaluated at the exact stage times. With `flapping=False, ripple=False, noise=0,
+effect="none"` (and `substeps=1`) a flight is therefore exactly fixed-step RK4 at the sample
+step with linearly interpolated inputs, the scheme of fwid's estimator (paper Sec. IV.B).
+
+**Measurement.** The CSV holds absolute values (trim + perturbation):
+
+- states plus Gaussian white noise, `NOISE` per channel times the `noise` scale;
+- `de`, `dr`: the commanded deflection plus a ripple locked to the flapping phase (first
+  and second harmonic, amplitudes `RIPPLE` x the manoeuvre amplitude) plus noise. The EOM
+  are driven by the commanded (cycle-averaged) deflection, not by the ripple (paper
+  Sec. IV.A: "control surface deflections are also cycle-averaged");
+- `f`: the true flapping frequency (12.5 Hz with a slow jitter of ~0.07 Hz rms, or with
+  `drift=True` a ramp 11.5 -> 13.2 Hz over the flight) plus noise;
+- `X Y Z L M N`: reconstructed from the measured (noisy) states as in the paper (Sec.
+  III.A, "reconstructed from the states assuming rigid-body dynamics"), see
+  `reconstruct_loads`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+from scipy import signal
+
+from ._delfly import ALL_PARAMS, DELFLY, FORCES, STATES, DelFly, aero_matrices, state_space
+from ._effects import Effect
+from ._inputs import DEFAULT_UNIT, N_UNITS, make_input
+
+#: Columns of a flight CSV, in file order (CONTRACTS section 1).
+COLUMNS = (
+    "t", "q", "u", "w", "theta", "p", "r", "v", "phi", "psi",
+    "de", "dr", "f", "X", "Y", "Z", "L", "M", "N",
+)  # fmt: skip
+
+#: Sensor noise standard deviations at `noise=1` (rad/s, m/s, rad, Hz). Roughly an optical
+#: tracking system after the usual pre-processing (paper Sec. III.A).
+NOISE = {
+    "q": 0.02, "u": 0.005, "w": 0.005, "theta": 0.002,
+    "p": 0.02, "r": 0.01, "v": 0.005, "phi": 0.002, "psi": 0.002,
+    "de": 0.002, "dr": 0.002, "f": 0.02,
+}  # fmt: skip
+
+#: Control-surface ripple: `(fraction of the manoeuvre amplitude, phase [rad])` of the
+#: first and second flapping harmonic, per surface.
+RIPPLE = {"de": ((0.3, 0.4), (0.1, 1.1)), "dr": ((0.25, -0.7), (0.08, 0.3))}
+
+#: Default manoeuvre amplitude [rad] per axis (elevator for `lon`, rudder for `lat`).
+DEFAULT_AMPLITUDE = {"lon": 0.12, "lat": 0.25}
+
+#: Flapping-frequency jitter: three slow sinusoids with these amplitude [Hz] and frequency
+#: [Hz] ranges (random per flight).
+JITTER_AMPLITUDE = (0.03, 0.07)
+JITTER_FREQUENCY = (0.15, 1.2)
+
+#: Frequency ramp [Hz] of `drift=True`, from the first to the last sample.
+DRIFT = (11.5, 13.2)
+
+#: Low-pass cut-off [Hz] (zero-phase, 4th-order Butterworth) of the reconstructed loads of a
+#: noisy flight: above the 3rd flapping harmonic (~40 Hz), as in the paper (Sec. III.B).
+LOAD_CUTOFF = 60.0
+
+_AXES = ("lon", "lat")
+
+
+# ----------------------------------------------------------------------------- flapping
+@dataclasses.dataclass(frozen=True)
+class FlapFrequency:
+    """The true flapping frequency `f(t) = f_start + slope t + sum_i A_i sin(2 pi nu_i t +
+    c_i)` and its phase `phase0 + 2 pi integral_0^t f`, both analytic (so RK4 stages get the
+    exact phase and a drifting frequency keeps the phase continuous)."""
+
+    f_start: float
+    slope: float = 0.0
+    amps: tuple = ()
+    freqs: tuple = ()
+    phases: tuple = ()
+    phase0: float = 0.0
+
+    def f(self, t):
+        t = np.asarray(t, dtype=float)
+        out = self.f_start + self.slope * t
+        for a, nu, c in zip(self.amps, self.freqs, self.phases):
+            out = out + a * np.sin(2 * np.pi * nu * t + c)
+        return out
+
+    def phase(self, t):
+        t = np.asarray(t, dtype=float)
+        cyc = self.f_start * t + 0.5 * self.slope * t * t
+        for a, nu, c in zip(self.amps, self.freqs, self.phases):
+            cyc = cyc + a / (2 * np.pi * nu) * (np.cos(c) - np.cos(2 * np.pi * nu * t + c))
+        return self.phase0 + 2 * np.pi * cyc
+
+
+def flapping_loads(phase, vehicle: DelFly = DELFLY) -> np.ndarray:
+    """Eq. 12 for all six loads: `(..., 6)` array `[X Y Z L M N]_TV` at flapping phase
+    `phase` (h = 3 harmonics, `a` sine, `b` cosine)."""
+    phase = np.asarray(phase, dtype=float)
+    out = np.zeros(phase.shape + (6,))
+    for i, F in enumerate(FORCES):
+        c = vehicle.fourier(F)
+        for n in range(3):
+            out[..., i] += c[n, 0] * np.sin((n + 1) * phase) + c[n, 1] * np.cos((n + 1) * phase)
+    return out
+
+
+def periodic_state(vehicle: DelFly, frequency: float, phase: float = 0.0) -> np.ndarray:
+    """The periodic (steady) response of the linear model (Eqs. 7-9) to the flapping loads
+    (Eq. 12) at a constant `frequency`, evaluated where the flapping phase is `phase`:
+    `Re sum_n (j n w I - A)^-1 G (b_n - j a_n) e^(j n phase)`, `w = 2 pi frequency`.
+    Starting there, a flight with flapping begins in its flapping cycle, cycle-averaged at
+    trim, with no start-up transient (exactly so for a constant frequency)."""
+    A, _, G = state_space(vehicle)
+    w = 2 * np.pi * frequency
+    x = np.zeros(9, dtype=complex)
+    for n in range(3):
+        c = np.array([vehicle.fourier(F)[n, 1] - 1j * vehicle.fourier(F)[n, 0] for F in FORCES])
+        x += np.linalg.solve(1j * (n + 1) * w * np.eye(9) - A, G @ c) * np.exp(1j * (n + 1) * phase)
+    return x.real
+
+
+# ----------------------------------------------------------------------------- differentiation
+_CENTRAL = {
+    1: np.array([-1 / 2, 0, 1 / 2]),
+    2: np.array([1 / 12, -2 / 3, 0, 2 / 3, -1 / 12]),
+    3: np.array([-1 / 60, 3 / 20, -3 / 4, 0, 3 / 4, -3 / 20, 1 / 60]),
+    4: np.array([1 / 280, -4 / 105, 1 / 5, -4 / 5, 0, 4 / 5, -1 / 5, 4 / 105, -1 / 280]),
+}
+
+
+def derivative(x, dt: float) -> np.ndarray:
+    """Time derivative of uniformly sampled `x` (along axis 0): 8th-order central
+    differences in the interior (gain within 0.5 % of the exact derivative up to 0.19 times
+    the sample rate, e.g. the 3rd flapping harmonic, 37.5 Hz, at 200 Hz), lower orders
+    towards the ends, one-sided 2nd order at the first and last sample."""
+    x = np.asarray(x, dtype=float)
+    n = x.shape[0]
+    d = np.gradient(x, dt, axis=0, edge_order=2) if n >= 3 else np.gradient(x, dt, axis=0)
+    for half in (2, 3, 4):
+        if n < 2 * half + 1:
+            break
+        # acc[i - half] = central difference of order 2*half at sample i
+        acc = sum(cj * x[j : n - 2 * half + j] for j, cj in enumerate(_CENTRAL[half]) if cj)
+        if half == 4:
+            d[half : n - half] = acc / dt
+        else:  # only where the next order does not fit
+            d[half] = acc[0] / dt
+            d[n - 1 - half] = acc[-1] / dt
+    return d
+
+
+def reconstruct_loads(
+    columns: Mapping[str, np.ndarray],
+    rate: float,
+    trim: Mapping[str, float],
+    vehicle: DelFly = DELFLY,
+    cutoff: float | None = LOAD_CUTOFF,
+) -> dict[str, np.ndarray]:
+    """Aerodynamic loads "as reconstructed from the measured motion": the linearised EOM
+    (Eqs. 7-8) solved for the aerodynamic terms, with the state derivatives from
+    `derivative` (numerical differentiation of the measured states):
+
+        X = X0 + m (du/dt + w0 dq + g cos(theta0) dtheta),        X0 = m g sin(theta0)
+        Z = Z0 + m (dw/dt - u0 dq + g sin(theta0) dtheta),        Z0 = -m g cos(theta0)
+        M = Iy dq/dt
+        Y = m (dv/dt - w0 dp + u0 dr - g cos(theta0) dphi)
+        L = Ix dp/dt - Ixz dr/dt
+        N = Iz dr/dt - Ixz dp/dt
+
+    (`d` = perturbation from `trim`). With `cutoff` [Hz] the result is low-pass filtered
+    (4th-order Butterworth, forward-backward: zero phase) to tame the noise that
+    differentiation amplifies; `None` skips it (noise-free flights).
+    """
+    m, g, Ix, Iy, Iz, Ixz = vehicle.mass, vehicle.g, vehicle.Ix, vehicle.Iy, vehicle.Iz, vehicle.Ixz
+    u0, w0, th0 = trim["u0"], trim["w0"], trim["theta0"]
+    dt = 1.0 / rate
+
+    def pert(c):
+        return np.asarray(columns[c], dtype=float) - trim.get(c + "0", 0.0)
+
+    dq, dtheta, dp, dr, dphi = pert("q"), pert("theta"), pert("p"), pert("r"), pert("phi")
+    ddot = derivative(np.stack([pert(c) for c in ("q", "u", "w", "p", "r", "v")], axis=1), dt)
+    qd, ud, wd, pd, rd, vd = ddot.T
+    X = m * g * np.sin(th0) + m * (ud + w0 * dq + g * np.cos(th0) * dtheta)
+    Z = -m * g * np.cos(th0) + m * (wd - u0 * dq + g * np.sin(th0) * dtheta)
+    M = Iy * qd
+    Y = m * (vd - w0 * dp + u0 * dr - g * np.cos(th0) * dphi)
+    L = Ix * pd - Ixz * rd
+    N = Iz * rd - Ixz * pd
+    out = {"X": X, "Y": Y, "Z": Z, "L": L, "M": M, "N": N}
+    if cutoff is not None and len(X) > 30:
+        sos = signal.butter(4, min(cutoff, 0.45 * rate), fs=rate, output="sos")
+        out = {k: signal.sosfiltfilt(sos, v) for k, v in out.items()}
+    return out
+
+
+# ----------------------------------------------------------------------------- RK4
+def _integrate(vehicle, effect, t_int, u_int, F_int, F_mid, xc0, xo0, flapping):
+    """Fixed-step RK4 over the internal grid `t_int` (step h) of the cycle-averaged states
+    `xc` and, with `flapping`, the flapping response `xo` (superposition, exact for the
+    linear model: `x = xc + xo`):
+
+        xc' = A xc + B u_eff + G extra(xc, u_eff)       (Eqs. 7-9, 1-6 + effect)
+        xo' = A xo + G gain(xc) F_TV(phi_f(t))          (Eq. 12 loads in Eqs. 7-9)
+
+    Effects act on the cycle-averaged states. With the `actuator-dynamics` effect two lag
+    states `u_eff' = (u_cmd - u_eff) / tau` follow. `u_int` (N+1, 2): commanded input on the
+    grid (linear between samples, so midpoints are averages); `F_int`/`F_mid`: flapping
+    loads on the grid and at the step midpoints. Returns `(xc, xo, u_eff)` on the grid
+    (`u_eff` is `None` without actuator dynamics)."""
+    A, B, G = state_space(vehicle)
+    tau = effect.lag_tau()
+    lag = tau is not None
+    ext = effect.active and effect.name in ("nonlinear-aero", "lon-lat-coupling")
+    coupled = effect.active and effect.name == "flap-coupling"
+    io = 9 if flapping else None
+    il = (18 if flapping else 9) if lag else None
+    nz = 9 + (9 if flapping else 0) + (2 if lag else 0)
+
+    def rhs(z, u_cmd, F):
+        xc = z[:9]
+        u = z[il:] if lag else u_cmd
+        dxc = A @ xc + B @ u
+        if ext:
+            dxc = dxc + G @ effect.extra_loads(xc, u)
+        parts = [dxc]
+        if flapping:
+            Fg = F * effect.flap_gain(xc) if coupled else F
+            parts.append(A @ z[io : io + 9] + G @ Fg)
+        if lag:
+            parts.append((u_cmd - u) / tau)
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+    n = t_int.shape[0]
+    Z = np.zeros((n, nz))
+    z = np.zeros(nz)
+    z[:9] = xc0
+    if flapping:
+        z[io : io + 9] = xo0
+    Z[0] = z
+    h = t_int[1] - t_int[0] if n > 1 else 0.0
+    for j in range(n - 1):
+        um = 0.5 * (u_int[j] + u_int[j + 1])
+        k1 = rhs(z, u_int[j], F_int[j])
+        k2 = rhs(z + 0.5 * h * k1, um, F_mid[j])
+        k3 = rhs(z + 0.5 * h * k2, um, F_mid[j])
+        k4 = rhs(z + h * k3, u_int[j + 1], F_int[j + 1])
+        z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        Z[j + 1] = z
+    xc = Z[:, :9]
+    xo = Z[:, io : io + 9] if flapping else np.zeros_like(xc)
+    return xc, xo, (Z[:, il:] if lag else None)
+
+
+# ----------------------------------------------------------------------------- flight
+def _noise_sigmas(noise) -> dict[str, float]:
+    if isinstance(noise, Mapping):
+        unknown = set(noise) - set(NOISE)
+        if unknown:
+            raise ValueError(f"unknown noise channel(s) {sorted(unknown)}; known: {list(NOISE)}")
+        return {k: float(noise.get(k, v)) for k, v in NOISE.items()}
+    s = float(noise)
+    if not np.isfinite(s) or s < 0:
+        raise ValueError(f"noise must be a scale >= 0 or a dict of sigmas, got {noise!r}")
+    return {k: s * v for k, v in NOISE.items()}
+
+
+def simulate_flight(
+    *,
+    axis: str = "lon",
+    seed: int = 0,
+    duration: float = 4.5,
+    rate: float = 200.0,
+    input: str = "3211",
+    amplitude: float | None = None,
+    noise: float | Mapping[str, float] = 1.0,
+    flapping: bool = True,
+    ripple: bool = True,
+    drift: bool = False,
+    effect: str = "none",
+    strength: float = 1.0,
+    substeps: int = 1,
+    start: float = 1.0,
+    unit: float | None = None,
+    initial: Mapping[str, float] | None = None,
+    phase0: float = 0.0,
+    vehicle: DelFly = DELFLY,
+    load_cutoff: float | None = LOAD_CUTOFF,
+    loads: str = "reconstructed",
+) -> dict:
+    """Simulate one flight of the DelFly (paper Sec. VI, Eqs. 13-15 in Eqs. 7-9).
+
+    **Arguments:**
+    - `axis`: `"lon"` (elevator manoeuvre) or `"lat"` (rudder manoeuvre). Both axes are
+      always simulated and all columns written.
+    - `seed`: seeds `numpy.random.default_rng` (flapping-frequency jitter, sensor noise).
+    - `duration` [s], `rate` [Hz]: samples `t = 0, 1/rate, ..., duration`.
+    - `input`: `"3211"`, `"211"`, `"doublet"` or `"pulse"` (`_inputs.py`); `start` [s] is
+      the end of the quiet trim start, `unit` [s] the step length (default per input).
+    - `amplitude` [rad]: manoeuvre amplitude (default `DEFAULT_AMPLITUDE[axis]`).
+    - `noise`: scale of `NOISE` (0: noise-free), or a dict of per-channel sigmas.
+    - `flapping`: add the flapping loads (Eq. 12). `ripple`: measured surfaces ripple.
+    - `drift`: flapping frequency ramps `DRIFT` (11.5 -> 13.2 Hz) instead of 12.5 Hz.
+    - `effect`, `strength`: an unmodelled effect (`_effects.py`, CONTRACTS section 4).
+    - `substeps`: RK4 steps per sample (1: exactly the estimator's scheme).
+    - `initial`: initial perturbation by state name, added to the trim (with `flapping`,
+      to the periodic flapping response at t = 0, `periodic_state`, so that the flight starts
+      cycle-averaged at trim instead of with a start-up transient).
+    - `phase0`: flapping phase at t = 0.
+    - `vehicle`: the true parameters (default `DELFLY`).
+    - `load_cutoff`: low-pass cut-off of the reconstructed loads of a noisy flight [Hz].
+    - `loads`: `"reconstructed"` (default: from the measured motion, `reconstruct_loads`)
+      or `"true"` (the exact loads the EOM saw, e.g. for exact-recovery tests on force
+      outputs; noise-free reconstruction differs from them near input steps and at the
+      first/last few samples, where the state derivative has a kink or is one-sided).
+
+    **Returns:** a dict with one numpy array per `COLUMNS` entry (absolute values, SI units,
+    radians) and `"meta"`: `trim` (the true trim, sidecar form), `first_input` (index),
+    `vehicle`, `truth` (parameters, effect, strength, options; JSON-ready), `states`
+    (true perturbation states, `(n, 9)` in `STATES` order) = `states_cycle_averaged` +
+    `states_flap` (the two integrated parts), `clean` (noise-free columns),
+    `loads_true` / `loads_flap` (true absolute loads / their flapping part Eq. 12, dicts by
+    load name), `u_cmd` / `u_eff` (commanded / acting deflection perturbations `[de, dr]`),
+    `phase` (flapping phase at the samples), `flap` (the `FlapFrequency`).
+    """
+    if axis not in _AXES:
+        raise ValueError(f"axis must be 'lon' or 'lat', got {axis!r}")
+    substeps = int(substeps)
+    if substeps < 1:
+        raise ValueError(f"substeps must be >= 1, got {substeps}")
+    if rate <= 0 or duration <= 0:
+        raise ValueError("rate and duration must be > 0")
+    if loads not in ("reconstructed", "true"):
+        raise ValueError(f"loads must be 'reconstructed' or 'true', got {loads!r}")
+    eff = Effect(effect, float(strength))
+    sig = _noise_sigmas(noise)
+    rng = np.random.default_rng(seed)
+
+    n = round(duration * rate) + 1
+    t = np.arange(n) / rate
+    trim = vehicle.trim()
+
+    # --- flapping frequency (random draws first, in a fixed order)
+    amps = rng.uniform(*JITTER_AMPLITUDE, 3)
+    freqs = rng.uniform(*JITTER_FREQUENCY, 3)
+    cphase = rng.uniform(0.0, 2 * np.pi, 3)
+    if drift:
+        f_start, slope = DRIFT[0], (DRIFT[1] - DRIFT[0]) / t[-1]
+    else:
+        f_start, slope = vehicle.f0, 0.0
+    flap = FlapFrequency(f_start, slope, tuple(amps), tuple(freqs), tuple(cphase), phase0)
+    normals = rng.standard_normal((n, len(NOISE)))
+
+    # --- commanded input (perturbation), sampled
+    amp = DEFAULT_AMPLITUDE[axis] if amplitude is None else float(amplitude)
+    unit_s = DEFAULT_UNIT[input] if unit is None else float(unit)
+    cmd = make_input(input, t, start, unit_s, amp)
+    u_cmd = np.zeros((n, 2))
+    u_cmd[:, 0 if axis == "lon" else 1] = cmd
+
+    # --- integrate on the internal grid
+    xc0 = np.zeros(9)
+    for k, v in (initial or {}).items():
+        if k not in STATES:
+            raise ValueError(f"unknown initial state {k!r}; known: {STATES}")
+        xc0[STATES.index(k)] = float(v)
+    xo0 = periodic_state(vehicle, float(flap.f(0.0)), phase0) if flapping else np.zeros(9)
+    N = (n - 1) * substeps
+    h = 1.0 / (rate * substeps)
+    t_int = np.arange(N + 1) * h
+    u_int = np.stack([np.interp(t_int, t, u_cmd[:, i]) for i in range(2)], axis=1)
+    if flapping:
+        F_int = flapping_loads(flap.phase(t_int), vehicle)
+        F_mid = flapping_loads(flap.phase(t_int[:-1] + 0.5 * h), vehicle)
+    else:
+        F_int = F_mid = np.zeros((N + 1, 6))
+    xc, xo, ue = _integrate(vehicle, eff, t_int, u_int, F_int, F_mid, xc0, xo0, flapping)
+    xc, xo = xc[::substeps], xo[::substeps]
+    x = xc + xo
+    u_eff = ue[::substeps] if ue is not None else u_cmd
+
+    # --- true loads at the samples (what the EOM saw at each sample)
+    phase = flap.phase(t)
+    Fx, Fu = aero_matrices(vehicle)
+    dF = x @ Fx.T + u_eff @ Fu.T
+    F_tv = np.zeros((n, 6))
+    if flapping:
+        gain = eff.flap_gain(xc)
+        F_tv = flapping_loads(phase, vehicle) * np.asarray(gain)[..., None]
+    extra = eff.extra_loads(xc, u_eff)
+    dF = dF + F_tv + (0.0 if extra is None else extra)
+    load0 = np.array([trim[k + "0"] for k in FORCES])
+    loads_true = {k: load0[i] + dF[:, i] for i, k in enumerate(FORCES)}
+    loads_flap = {k: F_tv[:, i] for i, k in enumerate(FORCES)}
+
+    # --- measurement
+    clean = {"t": t}
+    for i, s in enumerate(STATES):
+        clean[s] = trim[s + "0"] + x[:, i]
+    ref = abs(amp) if amp != 0 else DEFAULT_AMPLITUDE[axis]
+    for j, surf in enumerate(("de", "dr")):
+        d = trim[surf + "0"] + u_cmd[:, j]
+        if ripple:
+            for hk, (frac, ph) in enumerate(RIPPLE[surf]):
+                d = d + frac * ref * np.sin((hk + 1) * phase + ph)
+        clean[surf] = d
+    clean["f"] = flap.f(t)
+    nz = np.flatnonzero(np.abs(cmd) > 0)
+    first = int(nz[0]) if nz.size else None
+    trim["f0"] = float(np.mean(clean["f"][: max(1, first or round(0.2 * rate))]))
+    meas = {}
+    for i, c in enumerate(NOISE):
+        meas[c] = clean[c] + sig[c] * normals[:, i] if sig[c] > 0 else clean[c].copy()
+    noisy = any(sig[c] > 0 for c in STATES)
+    if loads == "true":
+        rec = {k: v.copy() for k, v in loads_true.items()}
+    else:
+        rec = reconstruct_loads(meas, rate, trim, vehicle, load_cutoff if noisy else None)
+    clean.update(loads_true)
+
+    cols = {"t": t}
+    for c in COLUMNS[1:]:
+        cols[c] = rec[c] if c in FORCES else meas[c]
+
+    truth = {
+        "parameters": vehicle.params(ALL_PARAMS),
+        **eff.truth(),
+        "axis": axis,
+        "seed": int(seed),
+        "input": {
+            "type": input,
+            "surface": "de" if axis == "lon" else "dr",
+            "start": float(start),
+            "unit": unit_s,
+            "amplitude": amp,
+            "n_units": N_UNITS[input],
+        },
+        "flapping": bool(flapping),
+        "ripple": bool(ripple),
+        "drift": bool(drift),
+        "substeps": substeps,
+        "rate": float(rate),
+        "noise": sig,
+        "loads": loads,
+        "flapping_frequency": {
+            "f_start": float(f_start),
+            "slope": float(slope),
+            "jitter_amplitudes": amps.tolist(),
+            "jitter_frequencies": freqs.tolist(),
+            "jitter_phases": cphase.tolist(),
+            "phase0": float(phase0),
+        },
+        "vehicle": vehicle.vehicle(),
+    }
+    meta = {
+        "axis": axis,
+        "trim": trim,
+        "first_input": first,
+        "vehicle": vehicle.vehicle(),
+        "truth": truth,
+        "states": x,
+        "states_cycle_averaged": xc,
+        "states_flap": xo,
+        "clean": clean,
+        "loads_true": loads_true,
+        "loads_flap": loads_flap,
+        "u_cmd": u_cmd,
+        "u_eff": np.array(u_eff),
+        "phase": phase,
+        "flap": flap,
+    }
+    cols["meta"] = meta
+    return cols
