@@ -354,7 +354,8 @@ def run(args):
 
     def row(method, n, warm, first=None, **kw):
         w = statistics.median(warm) if warm else None
-        r = dict(method=method, n_flights=n, warm_s=w, warm_all_s=list(warm),
+        r = dict(method=method, n_flights=n, warm_s=w, warm_min_s=min(warm) if warm else None,
+                 warm_all_s=list(warm),
                  first_call_s=first,
                  compile_s=(None if first is None or w is None else max(first - w, 0.0)),
                  fits_per_s=(n / w if w else None), **kw)
@@ -470,6 +471,7 @@ def run(args):
                             else "whole fit"),
                 extrapolated=k < n, measured_flights=k, scipy_info=sc_info[:k])
         r["warm_s"] = total
+        r["warm_min_s"] = min(ts0) * n if n == 1 else total
         r["fits_per_s"] = n / total
         scipy_time[n] = total
         if n in fwid_est:
@@ -677,7 +679,7 @@ def markdown(res):
         f"{pb['inputs']}, white noise; start: {pb['start']}. "
         f"{'Quick run. ' if res['quick'] else ''}Total {res['total_wall_s']:.0f} s.",
         "",
-        "| method | N | warm [s] | compile [s] | fits/s | speed-up vs scipy | peak memory "
+        "| method | N | warm median (min) [s] | compile [s] | fits/s | speed-up vs scipy | peak memory "
         "| aero max rel diff vs fwid (in CR std) | note |",
         "|---|---:|---:|---:|---:|---:|---|---|---|",
     ]
@@ -706,7 +708,8 @@ def markdown(res):
             note.append(f"{it if isinstance(it, int) else f'{min(it)}-{max(it)}'} iterations")
         comp = "-" if r["compile_s"] is None else f"{r['compile_s']:.1f}"
         lines.append(
-            f"| {r['method']} | {r['n_flights']} | {r['warm_s']:.3f} | {comp} | "
+            f"| {r['method']} | {r['n_flights']} | {r['warm_s']:.3f} ({r['warm_min_s']:.3f}) | "
+            f"{comp} | "
             f"{r['fits_per_s']:.3g} | {r['speedup_vs_scipy']:.3g} | {_fmt_mem(r)} | {agree} | "
             f"{'; '.join(note)} |")
     lines += [
@@ -717,6 +720,17 @@ def markdown(res):
         "RSS = growth of the process's peak resident set during the calls (0 when an earlier "
         "step already reached it); scipy: tracemalloc peak of Python allocations.",
     ]
+    lines += ["", "Batch scaling, warm time for N flights / warm time for 1 flight (fwid: the "
+              "vmapped call over fwid.fit on one flight):", ""]
+    by = {(r["method"], r["n_flights"]): r["warm_s"] for r in res["rows"]}
+    for name, one, many in [("fwid", ("fwid.fit", 1), "fwid vmap(_fit_batch)"),
+                            ("fwid.fit loop", ("fwid.fit", 1), "fwid.fit loop"),
+                            ("JAX reference", ("JAX reference (jit)", 1), "JAX reference (vmap)"),
+                            ("scipy", ("scipy baseline", 1), "scipy baseline")]:
+        parts = [f"N={n}: {by[(many, n)] / by[one]:.2f}x" for n in res["problem"]["sizes"]
+                 if n > 1 and (many, n) in by and one in by]
+        if parts:
+            lines.append(f"- {name}: " + ", ".join(parts))
     prof = res.get("profile")
     if prof:
         lines += ["", "## Profile (one flight)", "", "| part | run [ms] | trace+lower [s] | "

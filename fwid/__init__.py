@@ -61,6 +61,7 @@ from .estimate import (
     DampedGaussNewton as DampedGaussNewton,
     FitResult as FitResult,
     fit as fit,
+    fit_each as fit_each,
     least_squares_start as least_squares_start,
 )
 from .validate import eigenvalues as eigenvalues, fit_metrics as fit_metrics, modes as modes

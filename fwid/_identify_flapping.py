@@ -75,12 +75,13 @@ def _phase(flight: Flight) -> np.ndarray:
     return np.asarray(flapping_phase(flight["f"], flight.dt))
 
 
-def _check_frequency(flight: Flight, z: np.ndarray, outputs) -> str:
+def _check_frequency(flight: Flight, z: np.ndarray, outputs, sl: slice) -> str:
     """Cross-check the `f` column against the flapping forces; fine if any output agrees."""
     first = None
+    f = np.asarray(flight["f"])[sl]
     for j in range(z.shape[1]):
         try:
-            return check_flapping_frequency(flight["f"], z[:, j], flight.dt, name=flight.name)
+            return check_flapping_frequency(f, z[:, j], flight.dt, name=flight.name)
         except FlightDataError as e:
             first = first or e
     raise first
@@ -108,8 +109,9 @@ def flapping_data(
     cutoff: float = 5.0,
     noise_cutoff: float | None = None,
     cycle: GreyBoxModel | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The phase and the flapping forces of one flight: what Eq. (12) is fitted to.
+    edge: float = 0.2,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The time, phase and flapping forces of one flight: what Eq. (12) is fitted to.
 
     **Arguments:**
     - `flight`: a flight with the force columns and the flapping frequency `f`.
@@ -121,9 +123,12 @@ def flapping_data(
     - `cycle`: an identified cycle-averaged model; when given, its forces on the measured
       states (`F_TA`) are taken off first, so that the flapping part holds only `F_TV` and
       Eqs. (13)-(15) do not count the state-driven part of the flapping forces twice.
+    - `edge`: seconds dropped at each end after filtering, where the zero-phase split sees
+      past the record's ends (as for the cycle-averaged data); none for very short flights.
 
-    **Returns:** `(phase, z)`: the flapping phase `(n,)` [rad] and the flapping forces
-    `(n, outputs)`.
+    **Returns:** `(t, phase, z)`: the time `(m,)` [s], the flapping phase `(m,)` [rad] (the
+    integral of `2 pi f` from the flight's first sample) and the flapping forces
+    `(m, outputs)`, with `m = n - 2 round(edge / dt)`.
     """
     flight.require(tuple(outputs) + ("f",))
     if cycle is not None:
@@ -133,7 +138,20 @@ def flapping_data(
         flight = flight.with_columns(**cols)
     part = flapping_part(flight, cutoff=cutoff, noise_cutoff=noise_cutoff)
     z = np.stack([np.asarray(part[k]) for k in outputs], axis=-1)
-    return _phase(flight), z
+    k = _edge(flight, edge)
+    sl = slice(k, flight.n - k)
+    return np.asarray(flight.t)[sl], _phase(flight)[sl], z[sl]
+
+
+def _edge(flight: Flight, edge: float) -> int:
+    k = int(round(edge / flight.dt))
+    return k if flight.n - 2 * k >= 50 else 0
+
+
+def _trimmed(flight: Flight, t: np.ndarray) -> slice:
+    """The samples of `flight` that `flapping_data` kept (`t` its time)."""
+    k = (flight.n - t.shape[0]) // 2
+    return slice(k, k + t.shape[0])
 
 
 def _experiment(t, phase, z) -> Experiment:
@@ -265,16 +283,16 @@ def identify_flapping_model(
     data = [flapping_data(f, outputs, cutoff=cutoff, noise_cutoff=noise_cutoff, cycle=c)
             for f, c in zip(flights, cycles)]
     if check_frequency:
-        for f, (_, z) in zip(flights, data):
-            _say(progress, _check_frequency(f, z, outputs))
-    exps = [_experiment(f.t, ph, z) for f, (ph, z) in zip(flights, data)]
+        for f, (t, _, z) in zip(flights, data):
+            _say(progress, _check_frequency(f, z, outputs, _trimmed(f, t)))
+    exps = [_experiment(t, ph, z) for t, ph, z in data]
 
     # The first flight fixes the phase frame; the others are aligned to it.
     first = _fit_fourier(model, exps[:1], names[:1], progress)
     offsets = {names[0]: 0.0}
-    for f, (ph, z), i in zip(flights[1:], data[1:], range(1, len(flights))):
+    for f, (t, ph, z), i in zip(flights[1:], data[1:], range(1, len(flights))):
         offsets[f.name] = estimate_phase_offset(first.model, ph, z)
-        exps[i] = _experiment(f.t, ph + offsets[f.name], z)
+        exps[i] = _experiment(t, ph + offsets[f.name], z)
         _say(progress, f"{f.name}: phase offset {offsets[f.name]:+.3f} rad to {names[0]}")
     if len(flights) == 1:
         fits = [first]
@@ -289,28 +307,32 @@ def identify_flapping_model(
                                      for k in model.free})
     fmean = {f.name: float(np.mean(np.asarray(f["f"]))) for f in flights}
     estimation, peaks = [], {}
-    for i, (f, e) in enumerate(zip(flights, exps)):
+    for i, (f, e, (t, _, _)) in enumerate(zip(flights, exps, data)):
         m = fits[i].model if (len(fits) > 1) else summary
-        ff = _flight_fit(f.name, f.t, _display_inputs(f, outputs, cutoff, e), m, e,
+        sl = _trimmed(f, t)
+        ff = _flight_fit(f.name, t, _display_inputs(f, outputs, cutoff, e, sl), m, e,
                          {"phase_offset": offsets[f.name]})
         estimation.append(ff)
-        peaks[f.name] = _peaks(ff.measured, ff.simulated, f.dt, f["f"], harmonics, cutoff)
+        peaks[f.name] = _peaks(ff.measured, ff.simulated, f.dt, np.asarray(f["f"])[sl],
+                               harmonics, None)
 
     validation = []
     vcycles = _per_flight(validate_cycle, len(validate), "validate_cycle")
     for f, c in zip(validate, vcycles):
-        ph, z = flapping_data(f, outputs, cutoff=cutoff, noise_cutoff=noise_cutoff, cycle=c)
+        t, ph, z = flapping_data(f, outputs, cutoff=cutoff, noise_cutoff=noise_cutoff, cycle=c)
+        sl = _trimmed(f, t)
         if check_frequency:
-            _say(progress, _check_frequency(f, z, outputs))
+            _say(progress, _check_frequency(f, z, outputs, sl))
         d = estimate_phase_offset(summary, ph, z)
         offsets[f.name] = d
         fmean[f.name] = float(np.mean(np.asarray(f["f"])))
         _say(progress, f"{f.name}: validation phase offset {d:+.3f} rad")
-        e = _experiment(f.t, ph + d, z)
-        ff = _flight_fit(f.name, f.t, _display_inputs(f, outputs, cutoff, e), summary, e,
+        e = _experiment(t, ph + d, z)
+        ff = _flight_fit(f.name, t, _display_inputs(f, outputs, cutoff, e, sl), summary, e,
                          {"phase_offset": d})
         validation.append(ff)
-        peaks[f.name] = _peaks(ff.measured, ff.simulated, f.dt, f["f"], harmonics, cutoff)
+        peaks[f.name] = _peaks(ff.measured, ff.simulated, f.dt, np.asarray(f["f"])[sl],
+                               harmonics, None)
     return FlappingIdentification(
         model=summary, flights=names, fits=fits, estimation=estimation,
         validation=validation, phase_offsets=offsets, frequencies=fmean, peaks=peaks,
@@ -318,12 +340,12 @@ def identify_flapping_model(
     )
 
 
-def _display_inputs(flight, outputs, cutoff, exp) -> dict:
+def _display_inputs(flight, outputs, cutoff, exp, sl: slice) -> dict:
     """The cycle-averaged control input (for the paper's scaled input) and the phase."""
     out = {}
     col = _input_name(outputs)
     if col in flight:
-        out[col] = _slow(flight, col, cutoff)
+        out[col] = _slow(flight, col, cutoff)[sl]
     out["phase"] = np.asarray(exp.u[:, 0])
     return out
 
@@ -398,17 +420,20 @@ def steady_vs_manoeuvre(
     **Raises:** [`fwid.InputError`][] when either part is shorter than `min_cycles` cycles.
     """
     outputs = _outputs_for([flight], outputs)
-    k = flight.first_input if split is None else int(split)
-    ph, z = flapping_data(flight, outputs, cutoff=cutoff, noise_cutoff=noise_cutoff)
+    split = flight.first_input if split is None else int(split)
+    t, ph, z = flapping_data(flight, outputs, cutoff=cutoff, noise_cutoff=noise_cutoff)
+    sl_all = _trimmed(flight, t)
+    k = split - sl_all.start  # the split in the trimmed record
     fbar = float(np.mean(np.asarray(flight["f"])))
     need = int(np.ceil(min_cycles / (fbar * flight.dt)))
-    if k < need or flight.n - k < need:
+    if k < need or t.shape[0] - k < need:
         raise InputError(
-            f"{flight.name}: the quiet start ({k} samples) and the manoeuvre ({flight.n - k} "
-            f"samples) must each hold at least {min_cycles:g} flapping cycles ({need} samples)"
+            f"{flight.name}: the quiet start ({max(k, 0)} samples) and the manoeuvre "
+            f"({t.shape[0] - max(k, 0)} samples), less {sl_all.start} filter-edge samples at "
+            f"each end, must each hold at least {min_cycles:g} flapping cycles ({need} samples)"
         )
     model = fourier_model(outputs, harmonics)
-    t = np.asarray(flight.t)
+    full_inputs = _display_inputs(flight, outputs, cutoff, _experiment(t, ph, z), sl_all)
     parts, fits, summary = [], [], {}
     fmax = min((harmonics + 0.5) * float(np.max(np.asarray(flight["f"]))), 0.5 / flight.dt)
     if noise_cutoff is not None:
@@ -416,8 +441,7 @@ def steady_vs_manoeuvre(
     for label, sl in (("steady", slice(0, k)), ("manoeuvre", slice(k, None))):
         e = _experiment(t[sl], ph[sl], z[sl])
         r = _fit_fourier(model, [e], [f"{flight.name}[{label}]"], progress)
-        inputs = {kk: v[sl] for kk, v in _display_inputs(flight, outputs, cutoff,
-                                                            _experiment(t, ph, z)).items()}
+        inputs = {kk: v[sl] for kk, v in full_inputs.items()}
         ff = _flight_fit(f"{flight.name} ({label})", t[sl], inputs, r.model, e)
         share = nonharmonic_share(np.asarray(e.z), np.stack(list(ff.simulated.values()), -1),
                                   flight.dt, (cutoff, fmax))
@@ -428,7 +452,8 @@ def steady_vs_manoeuvre(
         }
         parts.append(ff)
         fits.append(r)
-    return SteadyVsManoeuvre(flight=flight.name, split=k, steady=parts[0], manoeuvre=parts[1],
+    return SteadyVsManoeuvre(flight=flight.name, split=split, steady=parts[0],
+                             manoeuvre=parts[1],
                              fits=(fits[0], fits[1]), summary=summary, frequency=fbar)
 
 

@@ -205,7 +205,8 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     middle = jax.vmap(middle_of)(Sw, w, batch.mask).sum(0)
     cov_cr = covariance(M)
     cov_c = covariance(M, middle)
-    return dict(theta=s * scale, R=R, cost=cost, passes=passes, steps=steps, hist=hist, converged=done,
+    finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
+    return dict(theta=s * scale, R=R, cost=cost, finite=finite, passes=passes, steps=steps, hist=hist, converged=done,
                 M=M, cov_cr=cov_cr, cov=cov_c)
 
 
@@ -276,13 +277,34 @@ def fit(
     """
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    t0 = time.perf_counter()
+    n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
+    start_model, theta0 = _prepare(model, exps, names, start, n_local)
+    if progress:
+        print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
+              f"{', '.join(names)} ...", flush=True)
+    out = _fit_batch_jit(
+        start_model, theta0, stack_experiments(exps), diagonal=(noise == "diagonal"),
+        max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
+        n_local_batch=n_local,
+    )
+    result = _result(model, start_model, theta0, out, names, n_local)
+    if progress:
+        state = "converged" if bool(result.converged) else "NOT converged"
+        print(f"fwid: {model.name} fit {state} in {int(result.passes)} passes, "
+              f"{int(result.steps)} Gauss-Newton steps, {time.perf_counter() - t0:.1f} s",
+              flush=True)
+    return result
+
+
+def _prepare(model, exps, names, start, n_local):
+    """Checks and start values: the start model and the initial free vector."""
     if not model.free:
         raise ValueError(f"model {model.name!r} has no free parameters to estimate")
     for e in exps:
         if e.t.dtype != jnp.float64:
             raise TypeError("fwid.fit needs float64 arrays: enable jax_enable_x64 (import fwid)")
     _check_excitation(model, exps, names)
-    t0 = time.perf_counter()
     if isinstance(start, GreyBoxModel):
         start_model = model.with_params(start.params)
     elif start == "least-squares":
@@ -291,22 +313,18 @@ def fit(
         start_model = model
     else:
         raise ValueError(f"start must be 'least-squares', 'model' or a model, not {start!r}")
-    n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
-    glob, loc, free_names = _free_layout(model, n_local)
+    glob, loc, _ = _free_layout(model, n_local)
     theta0 = jnp.concatenate([
         jnp.stack([start_model.params[k] for k in glob]) if glob else jnp.zeros(0),
         *[jnp.broadcast_to(start_model.params[k], (n_local,)) for k in loc],
     ])
-    batch = stack_experiments(exps)
-    if progress:
-        print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
-              f"{', '.join(names)} ...", flush=True)
-    out = _fit_batch_jit(
-        start_model, theta0, batch, diagonal=(noise == "diagonal"),
-        max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
-        n_local_batch=n_local,
-    )
-    if not np.isfinite(float(out["cost"])):
+    return start_model, theta0
+
+
+def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
+    """Check the estimator's raw output and wrap it in a [`fwid.FitResult`][]."""
+    glob, loc, free_names = _free_layout(model, n_local)
+    if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
         raise FitDivergedError(
             f"{', '.join(names)}: the {model.name} fit diverged (the simulation blows up for "
             "every step tried from the start values); check the units and the trim, or give "
@@ -317,7 +335,7 @@ def fit(
     cov = out["cov"]
     merged = _merge_batch(model, theta, n_local)
     first = {k: (v[0] if (k in loc and n_local) else v) for k, v in merged.items()}
-    result = FitResult(
+    return FitResult(
         model=start_model.with_params(first),
         names=tuple(free_names),
         theta=theta,
@@ -333,9 +351,56 @@ def fit(
         converged=out["converged"],
         start=theta0,
     )
+
+
+@eqx.filter_jit
+def _fit_each_batched(model, theta0s, batches, **kw):
+    return jax.vmap(lambda th, b: _fit_batch(model, th, b, **kw))(theta0s, batches)
+
+
+def fit_each(
+    model: GreyBoxModel,
+    experiments: Sequence[Experiment],
+    *,
+    names: Sequence[str] | None = None,
+    start: str | GreyBoxModel = "least-squares",
+    noise: str = "full",
+    max_passes: int = 12,
+    max_steps: int = 60,
+    rtol: float = 1e-10,
+    cost_rtol: float = 1e-10,
+    progress: bool = False,
+) -> list[FitResult]:
+    """Fit `model` to each experiment on its own, all in one vmapped call.
+
+    The flights are padded to a common length and masked (a padded sample never enters a
+    cost), so one compiled estimator serves every flight and the whole batch runs as a single
+    XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
+    on each flight alone. Arguments as for [`fwid.fit`][].
+
+    **Returns:** one [`fwid.FitResult`][] per experiment, in order.
+    """
+    exps = list(experiments)
+    names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    t0 = time.perf_counter()
+    starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
+    n = max(e.n for e in exps)
+    batches = [stack_experiments([e], n=n) for e in exps]
+    stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *batches)
+    theta0s = jnp.stack([th for _, th in starts])
     if progress:
-        state = "converged" if bool(result.converged) else "NOT converged"
-        print(f"fwid: {model.name} fit {state} in {int(result.passes)} passes, "
-              f"{int(result.steps)} Gauss-Newton steps, {time.perf_counter() - t0:.1f} s",
+        print(f"fwid: fitting {model.name} to {len(exps)} flights in one batched call ...",
               flush=True)
-    return result
+    out = _fit_each_batched(
+        model, theta0s, stacked, diagonal=(noise == "diagonal"), max_passes=max_passes,
+        max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol, n_local_batch=0,
+    )
+    results = [
+        _result(model, sm, th, jax.tree.map(lambda x: x[i], out), [names[i]], 0)
+        for i, (sm, th) in enumerate(starts)
+    ]
+    if progress:
+        ok = sum(bool(r.converged) for r in results)
+        print(f"fwid: {ok}/{len(results)} fits converged, {time.perf_counter() - t0:.1f} s",
+              flush=True)
+    return results

@@ -58,6 +58,7 @@ class GreyBoxModel(eqx.Module):
     inputs: tuple[str, ...] = eqx.field(static=True)
     outputs: tuple[str, ...] = eqx.field(static=True)
     params: Params
+    param_names: tuple[str, ...] = eqx.field(static=True)
     free: tuple[str, ...] = eqx.field(static=True)
     constants: tuple[str, ...] = eqx.field(static=True)
     forces: Callable | None = eqx.field(static=True)
@@ -91,11 +92,13 @@ class GreyBoxModel(eqx.Module):
             outputs = states
         self.outputs = tuple(outputs)
         self.params = {k: jnp.asarray(v, dtype=float) for k, v in params.items()}
+        # JAX rebuilds dicts in sorted-key order, so the declared order is kept separately.
+        self.param_names = tuple(params)
         free = tuple(params) if free is None else tuple(free)
         unknown = [k for k in free if k not in params]
         if unknown:
             raise ValueError(f"GreyBoxModel: free parameters {unknown} are not in `params`")
-        self.free = tuple(k for k in params if k in free)  # keep the params' order
+        self.free = tuple(k for k in params if k in free)  # in the declared order
         self.constants = tuple(constants)
         self.forces = forces
         self.force_names = tuple(force_names)
@@ -118,7 +121,8 @@ class GreyBoxModel(eqx.Module):
     def with_free(self, free: Sequence[str]) -> "GreyBoxModel":
         """A copy that estimates only `free` (the other parameters stay at their values)."""
         return GreyBoxModel(
-            self.f, states=self.states, inputs=self.inputs, params=self.params,
+            self.f, states=self.states, inputs=self.inputs,
+            params={k: self.params[k] for k in self.param_names},
             h=None if self.outputs_are_states else self.h,
             outputs=self.outputs, free=free, constants=self.constants, forces=self.forces,
             force_names=self.force_names, local=self.local, name=self.name,

@@ -27,7 +27,8 @@ def fit_metrics(
         sst = np.sum((zj - zj.mean()) ** 2)
         rng = np.ptp(zj)
         with np.errstate(invalid="ignore", divide="ignore"):
-            corr = float(np.corrcoef(zj, yj)[0, 1]) if np.std(yj) > 0 and np.std(zj) > 0 else float("nan")
+            corr = (float(np.corrcoef(zj, yj)[0, 1]) if np.ptp(yj) > 0 and np.ptp(zj) > 0
+                    else float("nan"))
         rms = float(np.sqrt(np.mean(e**2)))
         out[name] = dict(
             corr=corr,

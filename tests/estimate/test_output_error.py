@@ -224,10 +224,6 @@ def test_parameter_without_influence_raises(lon_flight):
     assert named == {"Mq", "Mu", "Mw", "Mde"}, msg
 
 
-@pytest.mark.xfail(strict=True, raises=fwid.ExcitationError, reason=(
-    "fwid bug: when the start makes the simulation blow up, R_of falls back to diag(zstd^2), "
-    "the cost stays finite, the fit 'converges' at the start and _check_information then "
-    "blames every parameter with an ExcitationError instead of FitDivergedError"))
 def test_blow_up_start_recovers_or_raises_diverged(lon_flight):
     bad = longitudinal().with_params(Mq=1.0)  # Mq/Iy = +1.7e4 1/s: the simulation overflows
     exp = lon_flight.experiment()
