@@ -14,7 +14,7 @@ import numpy as np
 from ._errors import InputError
 from .data._flight import Flight
 from .decompose import cycle_averaged
-from .estimate._output_error import FitResult, fit
+from .estimate._output_error import FitResult, fit, fit_each
 from .models._delfly import lateral, longitudinal
 from .models._greybox import GreyBoxModel
 from .simulate._experiment import Experiment, experiment
@@ -165,11 +165,7 @@ def identify(
                      for k in model.local if f"{k}@{i}" in fits[0].names}
             estimation.append(evaluate(summary.with_params(local), e, n, refit_local=False))
     else:
-        fits = []
-        for i, (e, n) in enumerate(zip(exps, names)):
-            if progress:
-                print(f"fwid: [{i + 1}/{len(exps)}]", end=" ", flush=True)
-            fits.append(fit(model, e, names=[n], progress=progress))
+        fits = fit_each(model, exps, names=names, progress=progress)
         summary = _mean_model(model, fits)
         estimation = [evaluate(f.model, e, n, refit_local=False)
                       for f, e, n in zip(fits, exps, names)]

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -23,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._errors import FlightDataError, InputError
-from ._identify import FlightFit, Identification, identify
+from ._identify import FlightFit, Identification, averaged, evaluate, identify
 from .data._flight import Flight
 from .data._trim import input_column
 from .decompose._filters import lowpass
@@ -231,7 +232,30 @@ def _per_flight(value, n, what):
     return value
 
 
+def _padded(exp: Experiment) -> Experiment:
+    """`exp` padded (mask 0) to the next power of two samples, at least 1024: fits of records
+    of similar length (flights, their quiet starts, their manoeuvres) then share one compiled
+    estimator; the static model costs little per sample."""
+    n = exp.n
+    m = max(1024, 1 << (n - 1).bit_length())
+    if m == n:
+        return exp
+    k = m - n
+    t = np.asarray(exp.t)
+    dt = t[1] - t[0]
+    tail = t[-1] + dt * np.arange(1, k + 1)
+    u = np.asarray(exp.u)
+    du = u[-1] - u[-2]
+    return Experiment(np.concatenate([t, tail]),
+                      np.concatenate([u, u[-1] + du * np.arange(1, k + 1)[:, None]]),
+                      np.concatenate([np.asarray(exp.z), np.zeros((k, exp.z.shape[1]))]),
+                      x0=np.zeros(0),
+                      mask=np.concatenate([np.asarray(exp.mask), np.zeros(k)]))
+
+
 def _fit_fourier(model, exps, names, progress):
+    """Least-squares start, then output-error ML ([`fwid.fit`][]), as in Section V.A."""
+    exps = [_padded(e) for e in exps]
     ls = fourier_least_squares(model, exps)
     return fit(model, exps, names=names, start=ls, progress=progress)
 
@@ -509,6 +533,67 @@ def _cycle_models(cycle: Identification) -> list[GreyBoxModel]:
     return [r.model for r in cycle.fits]
 
 
+def _refit_local_linear(model: GreyBoxModel, exp: Experiment, *, passes: int = 20):
+    """ML estimate of the bias terms (`model.local`) on one flight, all else held, for a model
+    whose outputs are affine in them (Eq. 7 with biases: `x' = A x + B u + b`).
+
+    The same estimate as `fwid.fit(model.with_free(model.local), ...)` (Eqs. 10-11 with R
+    relaxed), computed from `1 + len(local)` simulations by iteratively re-weighted linear
+    least squares, so validating the cycle-averaged part does not compile a second estimator.
+
+    **Returns:** the bias values by name, or `None` when the outputs are not affine in them.
+    """
+    local = list(model.local)
+    b0 = {k: 0.0 for k in local}
+    step = 1e-2
+
+    def sim(values):
+        return np.asarray(simulate(model.with_params(values), exp)[1])
+
+    y0 = sim(b0)
+    S = np.stack([(sim({**b0, k: step}) - y0) / step for k in local], axis=-1)  # (n, ny, p)
+    z = np.asarray(exp.z)
+    keep = np.asarray(exp.mask) > 0
+    z, y0, S = z[keep], y0[keep], S[keep]
+    r0 = z - y0
+    b = np.zeros(len(local))
+    R = r0.T @ r0 / r0.shape[0]
+    for _ in range(passes):
+        Linv = np.linalg.inv(np.linalg.cholesky(R + 1e-300 * np.eye(R.shape[0])))
+        A = np.einsum("ij,njp->nip", Linv, S).reshape(-1, len(local))
+        rhs = (r0 @ Linv.T).reshape(-1)
+        b_new, *_ = np.linalg.lstsq(A, rhs, rcond=None)
+        v = r0 - np.einsum("njp,p->nj", S, b_new)
+        R = v.T @ v / v.shape[0]
+        done = np.allclose(b_new, b, rtol=1e-10, atol=1e-14)
+        b = b_new
+        if done:
+            break
+    values = dict(zip(local, b.tolist()))
+    # affine? the prediction must match a simulation at the estimate
+    y_hat = sim(values)[keep]
+    pred = y0 + np.einsum("njp,p->nj", S, b)
+    if not np.allclose(y_hat, pred, rtol=1e-6, atol=1e-9 * (np.abs(y_hat).max() + 1e-300)):
+        return None
+    return values
+
+
+def _validate_cycle(cycle: Identification, flights, cutoff) -> Identification:
+    """The cycle-averaged validation of [`fwid.identify`][] (summary model, bias terms
+    re-estimated per flight), with the biases from `_refit_local_linear`."""
+    out = []
+    model = cycle.model
+    for f in flights:
+        exp = averaged(f, model, cutoff)
+        local = _refit_local_linear(model, exp) if model.local else {}
+        if local is None:  # not affine in the biases: the general (slower) path
+            out.append(evaluate(model, exp, f.name))
+            continue
+        ff = evaluate(model.with_params(local), exp, f.name, refit_local=False)
+        out.append(dataclasses.replace(ff, local_params=local))
+    return dataclasses.replace(cycle, validation=out)
+
+
 def combined_experiment(
     flight: Flight,
     model: GreyBoxModel,
@@ -613,8 +698,9 @@ def identify_combined(
     for f in flights + validate:
         f.require(outputs + ("f",))
     _say(progress, f"cycle-averaged ({axis}) model, Section IV")
-    cycle = identify(flights, axis, validate=validate, joint=joint, cutoff=cutoff,
-                     progress=progress)
+    cycle = identify(flights, axis, joint=joint, cutoff=cutoff, progress=progress)
+    if validate:
+        cycle = _validate_cycle(cycle, validate, cutoff)
     cycles = _cycle_models(cycle)
     vcycles = [cycle.model.with_params(v.local_params) for v in cycle.validation]
     _say(progress, "flapping (Fourier) model, Section V")

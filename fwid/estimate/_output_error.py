@@ -27,6 +27,11 @@ from ._uncertainty import (
 )
 
 
+# The Bartlett lag window of the coloured-residual bounds spans this many residual
+# correlation lengths (see `benchmarks/calibration.py` for how it was chosen).
+LAG_WINDOW_FACTOR = 4
+
+
 class FitResult(eqx.Module):
     """The output of [`fwid.fit`][]: estimates, their uncertainty and the fit's history.
 
@@ -196,10 +201,10 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     w = per_sample(s)
     Sw = -jax.jacfwd(per_sample)(s) / scale  # d(whitened y)/d theta: (B, n, ny, p)
     M = fisher_information(Sw.reshape(-1, Sw.shape[-1]))
-    # Lags never cross from one experiment into the next. Bartlett lag window twice as long
-    # as the residuals' correlation length (at least 2 samples, at most a quarter record).
+    # Lags never cross from one experiment into the next. Bartlett lag window spanning
+    # LAG_WINDOW_FACTOR residual correlation lengths (>= 2 samples, <= a quarter record).
     def middle_of(S, v, mask):
-        L = jnp.clip(2 * correlation_length(v, mask), 2, jnp.sum(mask) / 4)
+        L = jnp.clip(LAG_WINDOW_FACTOR * correlation_length(v, mask), 2, jnp.sum(mask) / 4)
         return coloured_residual_middle(S, v, mask, L)
 
     middle = jax.vmap(middle_of)(Sw, w, batch.mask).sum(0)

@@ -86,6 +86,26 @@ def _pooled_metrics(flight_fits):
     return fit_metrics(z, y, names)
 
 
+def modes_spread(per_flight_modes: list[list[dict]]) -> dict:
+    """Mean and spread over flights of each mode (Figures 8 and 11): the oscillatory modes'
+    natural frequency and damping, the aperiodic modes' time constants (sorted)."""
+    osc = [[m for m in ms if m["kind"] == "oscillatory"] for ms in per_flight_modes]
+    ape = [sorted(m["tau"] for m in ms if m["kind"] == "aperiodic") for ms in per_flight_modes]
+    out = {"flights": len(per_flight_modes)}
+    if all(osc):
+        wn = np.array([o[0]["wn"] for o in osc])
+        zeta = np.array([o[0]["zeta"] for o in osc])
+        out["oscillatory"] = {"wn_mean": wn.mean(), "wn_std": wn.std(ddof=1) if len(wn) > 1 else 0.0,
+                              "zeta_mean": zeta.mean(),
+                              "zeta_std": zeta.std(ddof=1) if len(zeta) > 1 else 0.0}
+    k = min(len(a) for a in ape)
+    if k:
+        taus = np.array([a[:k] for a in ape])
+        out["aperiodic_tau"] = [{"mean": taus[:, j].mean(), "min": taus[:, j].min(),
+                                 "max": taus[:, j].max()} for j in range(k)]
+    return out
+
+
 def identification_report(ident) -> dict:
     """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict."""
     model = ident.model
@@ -133,4 +153,5 @@ def identification_report(ident) -> dict:
         }
         report["summary"] = ("top-level parameters are the mean over the per-flight fits; "
                              "their std is the spread (sample std) across flights")
+        report["modes_spread"] = modes_spread([p["modes"] for p in per])
     return report

@@ -119,12 +119,23 @@ def _unit(k):
     return _UNITS.get(k, "")
 
 
+def _log_ticks(ax, lo, hi):
+    """Plain-number ticks on a logarithmic frequency axis (5, 10, 20, 50, ... Hz)."""
+    from matplotlib.ticker import FixedLocator, NullFormatter, ScalarFormatter
+
+    ticks = [v for v in (1, 2, 5, 10, 20, 30, 50, 100, 200) if lo <= v <= hi]
+    ax.xaxis.set_major_locator(FixedLocator(ticks))
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
 def _spectrum_axes(ax, freqs, series, f_flap, harmonics, fmax, unit):
     for (label, amp, style) in series:
         ax.plot(freqs, amp, label=label, **style)
     ax.set_xscale("log")
     lo = 0.4 * f_flap if f_flap else freqs[0]
     ax.set_xlim(lo, fmax)
+    _log_ticks(ax, lo, fmax)
     if f_flap:
         for k in range(1, harmonics + 1):
             if k * f_flap < fmax:
@@ -184,8 +195,9 @@ def plot_time_and_spectrum(
         ax.set_ylabel(f"{k} [{unit}]" if unit else k)
         m = flight_fit.metrics.get(k)
         if m:
-            ax.text(0.99, 0.95, f"RMS {m['rms']:.3g} ({m['rms_pct']:.1f} %)", ha="right",
-                    va="top", transform=ax.transAxes, fontsize=7)
+            rms = float(_display(k, m["rms"]))
+            ax.text(0.99, 0.95, f"RMS {rms:.3g} {unit} ({m['rms_pct']:.1f} % of range)",
+                    ha="right", va="top", transform=ax.transAxes, fontsize=7)
         freqs, amp = amplitude_spectrum(np.stack([zm, ys]), dt)
         _spectrum_axes(axes[row, 1], freqs,
                        [(measured_label, amp[0], dict(color="0.2", lw=0.9)),
