@@ -630,8 +630,12 @@ def run_profile(B, args, fit_warm_s):
     for k, v in il["ratios"].items():
         print(f"  ratio {k:<44} {v['median']:.2f}x median, {v['min']:.2f}x min", flush=True)
     info = B.fwid_alone[0][2]
-    prof["fwid_fit"] = dict(warm_s=fit_warm_s, **info,
-                            ms_per_gauss_newton_step=1e3 * fit_warm_s / max(info["steps"], 1))
+    fmin = il[names[0]]["min_s"]
+    prof["fwid_fit"] = dict(warm_s_table=fit_warm_s, warm_min_s_interleaved=fmin, **info,
+                            ms_per_gauss_newton_step=1e3 * fmin / max(info["steps"], 1))
+    ro = _block(fit_one(*a1))
+    prof["reference"] = dict(iterations=int(ro["iters"]), halvings=int(ro["halvings"]),
+                             ms_per_iteration=1e3 * il[names[1]]["min_s"] / int(ro["iters"]))
 
     # Steps per relaxation pass, recorded from inside fwid's own while loop: a stand-in for
     # the `optimistix` module fwid's estimator uses, whose least_squares reports each solve.
@@ -651,21 +655,19 @@ def run_profile(B, args, fit_warm_s):
 
     kw = B.fit_defaults
 
-    def what_if(label, **over):
+    def build(label, **over):
         fn = functools.partial(_oe._fit_batch, sm, n_local_batch=0, **{**kw, **over})
         compiled, tl, tc = _aot(fn, *fb_args)
         record.clear()
         out = _block(compiled(*fb_args))
-        passes = list(record)
-        w, wmin = _times(compiled, *fb_args, repeats=max(3, args.fwid_repeats))
         th = out["theta"] if "theta" in out else out["s"] * np.asarray(fb_args[1])
-        r = dict(warm_s=w, warm_min_s=wmin, trace_lower_s=tl, compile_s=tc, passes=int(out["passes"]),
-                 steps=int(out["steps"]), steps_accepted_per_pass=passes,
+        r = dict(trace_lower_s=tl, compile_s=tc, passes=int(out["passes"]),
+                 steps=int(out["steps"]), steps_accepted_per_pass=list(record),
                  max_rel_diff_vs_fwid_fit=float(np.max(np.abs(th / B.fwid_alone[0][0] - 1))))
-        print(f"  what-if {label:<34} warm {w:7.3f} s (min {wmin:.3f})  trace+lower {tl:5.2f} s compile "
-              f"{tc:5.2f} s  steps {r['steps']:4d} (per pass/accepted {passes})  "
+        print(f"  what-if {label:<34} trace+lower {tl:5.2f} s compile {tc:5.2f} s  steps "
+              f"{r['steps']:4d} (per pass/accepted {r['steps_accepted_per_pass']})  "
               f"drel {r['max_rel_diff_vs_fwid_fit']:.1e}", flush=True)
-        return r
+        return compiled, r
 
     def scan_simulate(model, exp, params=None, *, x0=None):
         params = model.params if params is None else params
@@ -673,19 +675,42 @@ def run_profile(B, args, fit_warm_s):
         xs = rk4_scan(model.f, params, x0, exp.u, exp.t[1] - exp.t[0], exp.consts)
         return xs, xs
 
-    wi = {}
+    variants = {}
     orig_optx, orig_sim = _oe.optx, _oe.simulate
-    try:
+    try:  # the patches matter while tracing only; the compiled programs keep what they saw
         _oe.optx = _OptxRecorder()
-        wi["as is"] = what_if("as is")
-        wi["max_steps 3 per pass (R relaxed every <=3 GN steps)"] = what_if(
+        variants["as is"] = build("as is")
+        variants["max_steps 3 per pass (R relaxed every <=3 GN steps)"] = build(
             "max_steps=3 per pass", max_steps=3, max_passes=40)
         _oe.simulate = scan_simulate
-        wi["lax.scan RK4 instead of diffrax"] = what_if("lax.scan RK4 instead of diffrax")
-        wi["lax.scan RK4 + max_steps 3 per pass"] = what_if(
+        variants["lax.scan RK4 instead of diffrax"] = build("lax.scan RK4 instead of diffrax")
+        variants["lax.scan RK4 + max_steps 3 per pass"] = build(
             "scan RK4 + max_steps=3 per pass", max_steps=3, max_passes=40)
     finally:
         _oe.optx, _oe.simulate = orig_optx, orig_sim
+    # timed round-robin, with the hand-written reference as the yardstick
+    wt = {k: [] for k in variants}
+    wt["JAX reference (jit)"] = []
+    for _ in range(5):
+        for k, (compiled, _) in variants.items():
+            t0 = time.perf_counter()
+            _block(compiled(*fb_args))
+            wt[k].append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        _block(fit_one(*a1))
+        wt["JAX reference (jit)"].append(time.perf_counter() - t0)
+    ref_min, ref_med = min(wt["JAX reference (jit)"]), statistics.median(wt["JAX reference (jit)"])
+    wi = {}
+    for k, (_, r) in variants.items():
+        r.update(warm_s=statistics.median(wt[k]), warm_min_s=min(wt[k]), all_s=wt[k],
+                 vs_reference_median=statistics.median(wt[k]) / ref_med,
+                 vs_reference_min=min(wt[k]) / ref_min)
+        wi[k] = r
+        print(f"  what-if {k:<52} warm {r['warm_s']:.3f} s (min {r['warm_min_s']:.3f}) = "
+              f"{r['vs_reference_median']:.0f}x / {r['vs_reference_min']:.0f}x the reference "
+              f"(median / min)", flush=True)
+    wi["JAX reference (jit)"] = dict(warm_s=ref_med, warm_min_s=ref_min,
+                                     all_s=wt["JAX reference (jit)"])
     prof["what_if"] = wi
     prof["note"] = ("what-ifs compile fwid's own _fit_batch (as fwid.fit calls it for one "
                     "flight) with names in fwid.estimate._output_error patched in this process "
@@ -802,15 +827,23 @@ def markdown(res):
         lines += [""] + [f"- {k}: {v['median']:.2f}x (median), {v['min']:.2f}x (min)"
                          for k, v in il["ratios"].items()]
         ff = prof["fwid_fit"]
+        rf = prof["reference"]
         lines += ["", f"fwid.fit on flight 0: {ff['passes']} relaxation passes, {ff['steps']} "
-                  f"Gauss-Newton steps, {ff['ms_per_gauss_newton_step']:.1f} ms per step.", "",
+                  f"Gauss-Newton steps, {ff['ms_per_gauss_newton_step']:.1f} ms per step (from "
+                  f"the minimum time). JAX reference: {rf['iterations']} iterations "
+                  f"({rf['halvings']} halvings), {rf['ms_per_iteration']:.1f} ms per iteration.",
+                  "",
                   "What-ifs (" + prof["note"] + "):", "",
-                  "| variant | warm median (min) [s] | trace+lower [s] | compile [s] | GN steps | "
-                  "steps/accepted"
-                  " per pass | rel diff vs fwid.fit |", "|---|---:|---:|---:|---:|---|---:|"]
+                  "| variant | warm median (min) [s] | x reference (median / min) | "
+                  "trace+lower [s] | compile [s] | GN steps | steps/accepted per pass | "
+                  "rel diff vs fwid.fit |", "|---|---:|---:|---:|---:|---:|---|---:|"]
         for k, v in prof["what_if"].items():
+            if "steps" not in v:
+                lines.append(f"| {k} | {v['warm_s']:.4f} ({v['warm_min_s']:.4f}) | 1 | | | | | |")
+                continue
             pp = ", ".join(f"{n}/{m}" for n, m in v["steps_accepted_per_pass"])
             lines.append(f"| {k} | {v['warm_s']:.3f} ({v['warm_min_s']:.3f}) | "
+                         f"{v['vs_reference_median']:.0f} / {v['vs_reference_min']:.0f} | "
                          f"{v['trace_lower_s']:.2f} | {v['compile_s']:.2f} | {v['steps']} | {pp} | "
                          f"{v['max_rel_diff_vs_fwid_fit']:.1e} |")
     return "\n".join(lines) + "\n"

@@ -44,6 +44,12 @@ from .decompose import (
 )
 from .models import (
     GreyBoxModel as GreyBoxModel,
+    combined as combined,
+    estimate_phase_offset as estimate_phase_offset,
+    force_parts as force_parts,
+    fourier_model as fourier_model,
+    fourier_series as fourier_series,
+    shift_phase as shift_phase,
     heading_rate as heading_rate,
     lateral as lateral,
     longitudinal as longitudinal,
@@ -71,7 +77,19 @@ from ._identify import (
     evaluate as evaluate,
     identify as identify,
 )
+from ._identify_flapping import (
+    CombinedIdentification as CombinedIdentification,
+    FlappingIdentification as FlappingIdentification,
+    SteadyVsManoeuvre as SteadyVsManoeuvre,
+    identify_combined as identify_combined,
+    identify_flapping_model as identify_flapping_model,
+    steady_vs_manoeuvre as steady_vs_manoeuvre,
+)
 from .report import (
+    harmonic_amplitudes as harmonic_amplitudes,
+    plot_steady_vs_manoeuvre as plot_steady_vs_manoeuvre,
+    plot_superposition as plot_superposition,
+    plot_time_and_spectrum as plot_time_and_spectrum,
     identification_report as identification_report,
     plot_decomposition as plot_decomposition,
     plot_flight_fit as plot_flight_fit,

@@ -41,10 +41,12 @@ from .models._fourier import (
     fourier_structure,
 )
 from .models._greybox import GreyBoxModel
+from .report._json import pooled_metrics
 from .report._spectra import harmonic_amplitudes
 from .simulate._experiment import Experiment, experiment
 from .simulate._simulate import simulate
 from .validate._metrics import fit_metrics
+from .validate._modes import eigenvalues
 
 # -- helpers ---------------------------------------------------------------------------------
 
@@ -126,6 +128,10 @@ def flapping_data(
       Eqs. (13)-(15) do not count the state-driven part of the flapping forces twice.
     - `edge`: seconds dropped at each end after filtering, where the zero-phase split sees
       past the record's ends (as for the cycle-averaged data); none for very short flights.
+
+    Noise on the `f` column integrates into a random walk of the phase (white noise of
+    0.02 Hz rms at 200 Hz drifts it by ~0.02 rad rms over 4.5 s), which the coefficients'
+    standard deviations do not include.
 
     **Returns:** `(t, phase, z)`: the time `(m,)` [s], the flapping phase `(m,)` [rad] (the
     integral of `2 pi f` from the flight's first sample) and the flapping forces
@@ -491,32 +497,34 @@ class CombinedIdentification:
     **Fields:**
     - `model`: the combined model (Eqs. 13-15 in Eq. 7): the summary cycle-averaged model
       plus the Fourier model.
-    - `cycle`: the cycle-averaged [`fwid.Identification`][] (Section IV).
+    - `cycle`: the cycle-averaged [`fwid.Identification`][] (Section IV), or `None` when a
+      cycle-averaged model was given.
     - `flapping`: the [`fwid.FlappingIdentification`][] of the Fourier part (Section V).
     - `estimation`, `validation`: [`fwid.FlightFit`][]s of the full simulation: states and
       total forces, measured vs combined model (Figures 16, 17).
     - `peaks`: per flight and signal, the first flapping peaks, measured vs model.
     - `parts`: per flight, the two force terms `{"TA": {X: ..}, "TV": {X: ..}}` (Figure 15).
     - `frequencies`: per flight, the mean flapping frequency [Hz].
+    - `flights`: the estimation flights' names; `consts`: the first flight's trim and vehicle.
+    - `cycle_model`: the summary cycle-averaged model inside `model`.
     """
 
     model: GreyBoxModel
-    cycle: Identification
+    cycle: Identification | None
     flapping: FlappingIdentification
     estimation: list[FlightFit]
     validation: list[FlightFit] = field(default_factory=list)
     peaks: dict[str, dict] = field(default_factory=dict)
     parts: dict[str, dict] = field(default_factory=dict)
     frequencies: dict[str, float] = field(default_factory=dict)
+    flights: list[str] = field(default_factory=list)
+    consts: dict[str, float] = field(default_factory=dict)
+    cycle_model: GreyBoxModel | None = None
 
     @property
     def eigenvalues(self) -> np.ndarray:
         """The eigenvalues of the cycle-averaged part (the Fourier part adds no dynamics)."""
-        return self.cycle.eigenvalues
-
-    @property
-    def flights(self) -> list[str]:
-        return self.cycle.flights
+        return eigenvalues(self.cycle_model or self.model, self.consts)
 
 
 def _cycle_models(cycle: Identification) -> list[GreyBoxModel]:
@@ -576,6 +584,15 @@ def _refit_local_linear(model: GreyBoxModel, exp: Experiment, *, passes: int = 2
     if not np.allclose(y_hat, pred, rtol=1e-6, atol=1e-9 * (np.abs(y_hat).max() + 1e-300)):
         return None
     return values
+
+
+def _local_of(model: GreyBoxModel, flight: Flight, cutoff: float) -> dict:
+    """A flight's bias terms for a given cycle-averaged model (ML, all else held)."""
+    if not model.local:
+        return {}
+    exp = averaged(flight, model, cutoff)
+    local = _refit_local_linear(model, exp)
+    return local if local is not None else evaluate(model, exp, flight.name).local_params
 
 
 def _validate_cycle(cycle: Identification, flights, cutoff) -> Identification:
@@ -664,12 +681,14 @@ def identify_combined(
     cutoff: float = 5.0,
     noise_cutoff: float | None = None,
     subtract_cycle: bool = True,
+    cycle: Identification | GreyBoxModel | None = None,
     progress: bool = False,
 ) -> CombinedIdentification:
     """Identify and simulate the full time-varying model, Section VI (Eqs. 13-15 in Eq. 7).
 
     1. The cycle-averaged model is identified on the cycle-averaged data (Section IV,
-       [`fwid.identify`][]).
+       [`fwid.identify`][]), unless given; the validation flights' bias terms are
+       re-estimated (all else held).
     2. The Fourier model is identified on the flapping part of the forces
        ([`fwid.identify_flapping_model`][]); with `subtract_cycle`, of the forces less the
        cycle-averaged model's forces on the measured states, so that Eq. (13)'s two terms
@@ -686,6 +705,9 @@ def identify_combined(
     - `cutoff`: the cycle-averaged / flapping split [Hz]; `noise_cutoff`: the noise low-pass
       of the flapping data and of the measurements the simulation is compared with (`None`).
     - `subtract_cycle`: see step 2.
+    - `cycle`: skip step 1: an [`fwid.Identification`][] made by [`fwid.identify`][] from
+      the same flights, or an identified cycle-averaged model (e.g. from notebook 01), whose
+      bias terms are then re-estimated on every flight.
     - `progress`: print what it does.
 
     **Returns:** a [`fwid.CombinedIdentification`][].
@@ -697,12 +719,24 @@ def identify_combined(
     outputs = LAT_OUTPUTS if axis == "lat" else LON_OUTPUTS
     for f in flights + validate:
         f.require(outputs + ("f",))
-    _say(progress, f"cycle-averaged ({axis}) model, Section IV")
-    cycle = identify(flights, axis, joint=joint, cutoff=cutoff, progress=progress)
-    if validate:
-        cycle = _validate_cycle(cycle, validate, cutoff)
-    cycles = _cycle_models(cycle)
-    vcycles = [cycle.model.with_params(v.local_params) for v in cycle.validation]
+    if isinstance(cycle, GreyBoxModel):
+        summary = cycle
+        cycle = None
+        cycles = [summary.with_params(_local_of(summary, f, cutoff)) for f in flights]
+        vcycles = [summary.with_params(_local_of(summary, f, cutoff)) for f in validate]
+    else:
+        if cycle is None:
+            _say(progress, f"cycle-averaged ({axis}) model, Section IV")
+            cycle = identify(flights, axis, joint=joint, cutoff=cutoff, progress=progress)
+        elif list(cycle.flights) != [f.name for f in flights]:
+            raise InputError(f"the cycle-averaged identification is of {cycle.flights}, not "
+                             f"of the flights given ({[f.name for f in flights]})")
+        done = [v.name for v in cycle.validation]
+        if validate and done != [f.name for f in validate]:
+            cycle = _validate_cycle(cycle, validate, cutoff)
+        summary = cycle.model
+        cycles = _cycle_models(cycle)
+        vcycles = [summary.with_params(v.local_params) for v in cycle.validation]
     _say(progress, "flapping (Fourier) model, Section V")
     flap = identify_flapping_model(
         flights, outputs, harmonics, validate=validate, joint=joint, cutoff=cutoff,
@@ -719,25 +753,16 @@ def identify_combined(
             group.append(ff)
             peaks[f.name], parts[f.name] = pk, pt
             freqs[f.name] = flap.frequencies[f.name]
+    consts = {k: float(v) for k, v in experiment(flights[0], summary).consts.items()}
     return CombinedIdentification(
-        model=combined(cycle.model, flap.model), cycle=cycle, flapping=flap,
+        model=combined(summary, flap.model), cycle=cycle, flapping=flap,
         estimation=estimation, validation=validation, peaks=peaks, parts=parts,
-        frequencies=freqs,
+        frequencies=freqs, flights=[f.name for f in flights], consts=consts,
+        cycle_model=summary,
     )
 
 
 # -- reports ---------------------------------------------------------------------------------
-
-
-def _pooled(flight_fits) -> dict:
-    if not flight_fits:
-        return {}
-    names = list(flight_fits[0].metrics)
-    z = np.concatenate([np.stack([{**f.measured, **f.forces_measured}[k] for k in names], -1)
-                        for f in flight_fits])
-    y = np.concatenate([np.stack([{**f.simulated, **f.forces_simulated}[k] for k in names], -1)
-                        for f in flight_fits])
-    return fit_metrics(z, y, names)
 
 
 def _params(r: FitResult) -> dict:
@@ -766,7 +791,7 @@ def flapping_report(ident: FlappingIdentification, steady=None) -> dict:
         "harmonics": harmonics,
         "parameters": {},
         "eigenvalues": [],
-        "metrics": {"estimation": _pooled(ident.estimation)},
+        "metrics": {"estimation": pooled_metrics(ident.estimation)},
         "phase_offsets": dict(ident.phase_offsets),
         "flapping_frequency": dict(ident.frequencies),
         "peaks": ident.peaks,
@@ -792,7 +817,7 @@ def flapping_report(ident: FlappingIdentification, steady=None) -> dict:
         report["summary"] = ("top-level parameters are the mean over the per-flight fits "
                              "(phase-aligned to the first flight); their std is the spread")
     if ident.validation:
-        report["metrics"]["validation"] = _pooled(ident.validation)
+        report["metrics"]["validation"] = pooled_metrics(ident.validation)
         report["validation_flights"] = [
             {"flight": v.name, "metrics": v.metrics,
              "phase_offset": v.local_params["phase_offset"]}
@@ -815,18 +840,25 @@ def combined_report(ident: CombinedIdentification) -> dict:
     peaks of every state and force, measured vs model.
     """
     from .report._json import identification_report
+    from .validate._modes import modes
 
-    cyc = identification_report(ident.cycle)
-    flap = flapping_report(ident.flapping)
     eigs = ident.eigenvalues
+    if ident.cycle is not None:
+        cyc = identification_report(ident.cycle)
+    else:  # a given cycle-averaged model: its values, no uncertainty
+        m = ident.model
+        cyc = {"model": m.name, "given": True, "modes": modes(eigs),
+               "parameters": {k: {"value": float(m.params[k]), "std": None}
+                              for k in m.free if k not in m.local and k in _cycle_names(m)}}
+    flap = flapping_report(ident.flapping)
     report = {
         "model": "combined",
         "flights": list(ident.flights),
-        "joint": bool(ident.cycle.joint),
+        "joint": bool(ident.flapping.joint),
         "parameters": {**cyc["parameters"], **flap["parameters"]},
         "eigenvalues": [[float(np.real(e)), float(np.imag(e))] for e in eigs],
         "modes": cyc.get("modes", []),
-        "metrics": {"estimation": _pooled(ident.estimation)},
+        "metrics": {"estimation": pooled_metrics(ident.estimation)},
         "phase_offsets": dict(ident.flapping.phase_offsets),
         "flapping_frequency": dict(ident.frequencies),
         "peaks": ident.peaks,
@@ -835,12 +867,19 @@ def combined_report(ident: CombinedIdentification) -> dict:
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
     }
     if ident.validation:
-        report["metrics"]["validation"] = _pooled(ident.validation)
+        report["metrics"]["validation"] = pooled_metrics(ident.validation)
         report["validation_flights"] = [
             {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
             for v in ident.validation
         ]
     return report
+
+
+def _cycle_names(model: GreyBoxModel) -> set[str]:
+    outputs, harmonics = (model.f.outputs, model.f.harmonics)
+    from .models._fourier import fourier_param_names
+
+    return set(model.params) - set(fourier_param_names(outputs, harmonics))
 
 
 def _peak_summary(peaks: dict) -> list[str]:

@@ -104,6 +104,10 @@ def fourier_model(
     if harmonics < 1:
         raise ValueError(f"fourier_model: harmonics must be at least 1, got {harmonics}")
     names = fourier_param_names(outputs, harmonics)
+    unknown = sorted(set(params or {}) - set(names))
+    if unknown:
+        raise ValueError(f"fourier_model: {unknown} are not coefficients of this series "
+                         f"({', '.join(names)})")
     p = dict.fromkeys(names, 0.0)
     p.update(params or {})
 

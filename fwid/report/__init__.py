@@ -7,3 +7,11 @@ from ._table import (
     modes_table as modes_table,
     parameter_table as parameter_table,
 )
+from ._spectra import (
+    amplitude_spectrum as amplitude_spectrum,
+    harmonic_amplitudes as harmonic_amplitudes,
+    peak_table as peak_table,
+    plot_steady_vs_manoeuvre as plot_steady_vs_manoeuvre,
+    plot_superposition as plot_superposition,
+    plot_time_and_spectrum as plot_time_and_spectrum,
+)

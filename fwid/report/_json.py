@@ -75,7 +75,8 @@ def _fit_block(ident, fit, estimation, eigs):
     }
 
 
-def _pooled_metrics(flight_fits):
+def pooled_metrics(flight_fits) -> dict:
+    """Metrics over several flights' samples pooled together (outputs and forces)."""
     if not flight_fits:
         return {}
     names = list(flight_fits[0].metrics)
@@ -117,12 +118,12 @@ def identification_report(ident) -> dict:
         "parameters": {},
         "eigenvalues": _eig_list(eigs),
         "modes": modes(eigs),
-        "metrics": {"estimation": _pooled_metrics(ident.estimation)},
+        "metrics": {"estimation": pooled_metrics(ident.estimation)},
         "trim_and_vehicle": ident.consts,
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
     }
     if ident.validation:
-        report["metrics"]["validation"] = _pooled_metrics(ident.validation)
+        report["metrics"]["validation"] = pooled_metrics(ident.validation)
         report["validation_flights"] = [
             {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
             for v in ident.validation

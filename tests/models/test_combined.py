@@ -105,10 +105,17 @@ def test_structure():
     assert model.force_names == ("X", "Z", "M")
     assert {"Xq", "Mde", "bq", "ax1", "bm3"} <= set(model.params)
     assert set(model.local) == {"bq", "bu", "bw", "btheta"}
-    # the state matrix is the cycle-averaged one: the Fourier part adds no dynamics
-    A, _ = model.state_matrices(model.params, LON_CONSTS)
-    A0, _ = longitudinal().state_matrices(longitudinal().params, LON_CONSTS)
-    np.testing.assert_allclose(np.asarray(A), np.asarray(A0))
+    # Eq. (7) plus the flapping forces: x' = f_TA(x, de) + G F_TV(phase) (Eqs. 13-15)
+    model = combined(longitudinal(TABLE1), fourier_model(params=TABLE7))
+    x, de, phase = np.array([0.3, -0.1, 0.2, 0.05]), 0.02, 1.234
+    c = {k: np.float64(v) for k, v in LON_CONSTS.items()}
+    xdot = np.asarray(model.f(x, np.array([de, phase]), model.params, c))
+    A = lon_A(TABLE1, LON_CONSTS)
+    B = np.array([TABLE1["Mde"] / LON_CONSTS["Iy"], TABLE1["Xde"] / LON_CONSTS["mass"],
+                  TABLE1["Zde"] / LON_CONSTS["mass"], 0.0])
+    F_tv = np.array([sum(TABLE7[f"a{o}{n}"] * np.sin(n * phase) + TABLE7[f"b{o}{n}"]
+                         * np.cos(n * phase) for n in (1, 2, 3)) for o in "xzm"])
+    np.testing.assert_allclose(xdot, A @ x + B * de + lon_G(LON_CONSTS) @ F_tv, rtol=1e-12)
     with pytest.raises(ValueError, match="not forces"):
         combined(longitudinal(), fourier_model(("Y", "L", "N")))
 
