@@ -6,11 +6,12 @@
 The same fits, in the same run, by three methods:
 
 1. **fwid**: `fwid.fit` on one flight; for N flights, N *independent* fits in one batched
-   call. fwid has no public batched API (no `fwid.fit_each`), so the benchmark vmaps fwid's
-   internal pure estimator `fwid.estimate._output_error._fit_batch` over a leading flight axis
-   (each flight a batch of one, fwid.fit's default settings read from its signature). The
-   batched estimates are checked against `fwid.fit` on each flight alone (rows "fwid.fit
-   loop"; identical means within 1e-9 relative).
+   call, `fwid.fit_each`. Where fwid has no `fit_each` (older versions), or the flights start
+   from different values (`--start least-squares`), the benchmark vmaps fwid's internal pure
+   estimator `fwid.estimate._output_error._fit_batch` over a leading flight axis instead (each
+   flight a batch of one, fwid.fit's default settings read from its signature). The batched
+   estimates are checked against `fwid.fit` on each flight alone (rows "fwid.fit loop";
+   identical means within 1e-9 relative).
 2. **scipy**: `benchmarks/_baseline.py` (numpy RK4 + `scipy.optimize.least_squares`, finite
    differences), a Python loop over flights. Only a subset of flights is timed; for larger N
    the time is the measured mean per flight times N, marked *extrapolated*.
@@ -298,6 +299,52 @@ class Bench:
         batch = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *batches)
         return theta0, batch
 
+    @property
+    def use_fit_each(self):
+        """`fwid.fit_each` takes one start for all flights: usable when the starts agree."""
+        return hasattr(fwid, "fit_each") and bool(np.all(self.starts == self.starts[0]))
+
+    @property
+    def batched_label(self):
+        return "fwid.fit_each" if self.use_fit_each else "fwid vmap(_fit_batch)"
+
+    def fwid_batched(self, n):
+        """A call that fits flights 0..n-1 independently in one batched fwid call and returns
+        `(theta (n, p), cramer_rao_std (n, p), info)`."""
+        if self.use_fit_each:
+            exps, sm = self.exps[:n], self._start_model(0)
+
+            def call():
+                rs = fwid.fit_each(self.model, exps, start=sm)
+                theta, std = _block((jnp.stack([r.theta for r in rs]),
+                                     jnp.stack([r.std_cr for r in rs])))
+                return theta, std, dict(passes_max=max(int(r.passes) for r in rs),
+                                        steps=[int(r.steps) for r in rs],
+                                        all_converged=all(bool(r.converged) for r in rs))
+        else:
+            fb, a = self.fwid_batched_fn(), self.fwid_batched_args(n)
+
+            def call():
+                out = _block(fb(*a))
+                return (out["theta"], np.sqrt(np.diagonal(out["cov_cr"], axis1=-2, axis2=-1)),
+                        dict(passes_max=int(out["passes"].max()), steps=out["steps"].tolist(),
+                             all_converged=bool(out["converged"].all())))
+        return call
+
+    def fwid_batched_xla_memory(self, n):
+        try:
+            if self.use_fit_each:
+                theta0s = jnp.stack([self._start_model(0).theta()] * n)
+                nmax = max(e.n for e in self.exps[:n])
+                stacked = jax.tree_util.tree_map(
+                    lambda *a: jnp.stack(a), *[stack_experiments([e], n=nmax) for e in self.exps[:n]])
+                lowered = _oe._fit_each_batched.lower(self.model, theta0s, stacked,
+                                                      n_local_batch=0, **self.fit_defaults)
+                return _xla_memory(lowered.lowered.compile())
+            return _xla_memory(self.fwid_batched_fn().lower(*self.fwid_batched_args(n)).compile())
+        except Exception:
+            return None
+
     def fit_batch_args(self, i=0):
         """The arguments fwid.fit gives `_fit_batch` for flight i alone (positional part)."""
         sm = self._start_model(i)
@@ -333,7 +380,7 @@ def _agreement(theta, theta_fwid, std_fwid):
 
 
 def run(args):
-    sizes = sorted(int(s) for s in args.sizes.split(","))
+    sizes = sorted({1} | {int(s) for s in args.sizes.split(",")})  # N=1 is every ratio's base
     n_max = max(sizes)
     consts, consts_source = vehicle_constants()
     t_start = time.perf_counter()
@@ -385,16 +432,14 @@ def run(args):
         row("fwid.fit loop", n, [total], None, extrapolated=k < n, measured_flights=k,
             fwid_info=[B.fwid_alone[i][2] for i in range(k)])
 
-    # ---- fwid, vmapped over flights ----
-    log("fwid batched: jax.vmap(_fit_batch) (fwid has no public batched fit)")
-    fb = B.fwid_batched_fn()
+    # ---- fwid, N independent fits in one batched call ----
+    log(f"fwid batched: {B.batched_label}" + ("" if B.use_fit_each else
+        " (fwid.fit_each missing, or flights start from different values)"))
     for n in sizes:
         if n == 1 and args.quick:
             continue  # quick: N=1 is fwid.fit's row (saves one compilation)
-        a = B.fwid_batched_args(n)
-        out, first, warm, mem = time_calls(lambda a=a: _block(fb(*a)), args.fwid_batch_repeats)
-        theta = out["theta"]
-        std = np.sqrt(np.diagonal(out["cov_cr"], axis1=-2, axis2=-1))
+        (theta, std, info), first, warm, mem = time_calls(B.fwid_batched(n),
+                                                          args.fwid_batch_repeats)
         alone = [i for i in range(n) if i in B.fwid_alone]
         ident = None
         if alone:
@@ -402,11 +447,9 @@ def run(args):
             ident = dict(flights_checked=len(alone),
                          max_rel_diff_all16=float(np.max(np.abs(theta[alone] - ta) / np.abs(ta))))
             ident["identical_1e-9"] = ident["max_rel_diff_all16"] <= 1e-9
-        xla = _xla_memory(fb.lower(*a).compile())
-        row("fwid vmap(_fit_batch)", n, warm, first, memory=dict(**mem, xla=xla),
-            identity_vs_fwid_fit_alone=ident, extrapolated=False,
-            fwid_info=dict(passes_max=int(out["passes"].max()), steps=out["steps"].tolist(),
-                           all_converged=bool(out["converged"].all())))
+        row(B.batched_label, n, warm, first,
+            memory=dict(**mem, xla=B.fwid_batched_xla_memory(n)),
+            identity_vs_fwid_fit_alone=ident, extrapolated=False, fwid_info=info)
         if n > 1 or 1 not in fwid_est:
             fwid_est[n] = (theta, std)
 
@@ -594,10 +637,10 @@ def run_profile(B, args, fit_warm_s):
     a1 = [x[0] if not isinstance(x, dict) else {k: v[0] for k, v in x.items()}
           for x in B.ref_args(1)]
     nb = min(4, len(B.starts))
-    fb, ab, ar = B.fwid_batched_fn(), B.fwid_batched_args(nb), B.ref_args(nb)
+    fbc, ar = B.fwid_batched(nb), B.ref_args(nb)
     calls = {"fwid.fit (N=1)": lambda: B.fwid_fit(0),
              "JAX reference jit (N=1)": lambda: _block(fit_one(*a1)),
-             f"fwid vmap (N={nb})": lambda: _block(fb(*ab)),
+             f"{B.batched_label} (N={nb})": fbc,
              f"JAX reference vmap (N={nb})": lambda: _block(fit_many(*ar))}
     for f in calls.values():  # compiled already unless --quick skipped a size
         f()
@@ -613,10 +656,10 @@ def run_profile(B, args, fit_warm_s):
         "fwid.fit / reference (N=1)": dict(
             median=il[names[0]]["median_s"] / il[names[1]]["median_s"],
             min=il[names[0]]["min_s"] / il[names[1]]["min_s"]),
-        f"fwid vmap / reference vmap (N={nb})": dict(
+        f"{B.batched_label} / reference vmap (N={nb})": dict(
             median=il[names[2]]["median_s"] / il[names[3]]["median_s"],
             min=il[names[2]]["min_s"] / il[names[3]]["min_s"]),
-        f"fwid vmap (N={nb}) / fwid.fit (N=1)": dict(
+        f"{B.batched_label} (N={nb}) / fwid.fit (N=1)": dict(
             median=il[names[2]]["median_s"] / il[names[0]]["median_s"],
             min=il[names[2]]["min_s"] / il[names[0]]["min_s"]),
         f"reference vmap (N={nb}) / reference jit (N=1)": dict(
@@ -787,8 +830,8 @@ def markdown(res):
     lines += [
         "",
         "warm: median of repeated calls after the first; compile: first call minus warm. "
-        "fwid for N > 1 is `jax.vmap` over fwid's internal `_fit_batch` (no public batched "
-        "API yet). Memory: XLA = temporaries + arguments + outputs of the compiled program; "
+        "fwid for N > 1: `fwid.fit_each` (one vmapped call), or `jax.vmap` over fwid's internal "
+        "`_fit_batch` where fwid has no `fit_each`. Memory: XLA = temporaries + arguments + outputs of the compiled program; "
         "RSS = growth of the process's peak resident set during the calls (0 when an earlier "
         "step already reached it); scipy: tracemalloc peak of Python allocations.",
     ]
@@ -800,9 +843,11 @@ def markdown(res):
                   f"{f1['warm_min_s'] / j1['warm_min_s']:.1f}x min (target <= 2x); fwid.fit "
                   f"compile {f1['compile_s']:.1f} s (target < 30 s)."]
     lines += ["", "Batch scaling, warm time for N flights / warm time for 1 flight (fwid: the "
-              "vmapped call over fwid.fit on one flight):", ""]
+              "batched call over fwid.fit on one flight):", ""]
     by = {(r["method"], r["n_flights"]): r["warm_s"] for r in res["rows"]}
-    for name, one, many in [("fwid", ("fwid.fit", 1), "fwid vmap(_fit_batch)"),
+    batched = next((r["method"] for r in res["rows"]
+                    if r["method"] in ("fwid.fit_each", "fwid vmap(_fit_batch)")), None)
+    for name, one, many in [("fwid", ("fwid.fit", 1), batched),
                             ("fwid.fit loop", ("fwid.fit", 1), "fwid.fit loop"),
                             ("JAX reference", ("JAX reference (jit)", 1), "JAX reference (vmap)"),
                             ("scipy", ("scipy baseline", 1), "scipy baseline")]:

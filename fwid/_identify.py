@@ -14,6 +14,7 @@ import numpy as np
 from ._errors import InputError
 from .data._flight import Flight
 from .decompose import cycle_averaged
+from .estimate._local import refit_local_affine
 from .estimate._output_error import FitResult, fit, fit_each
 from .models._delfly import lateral, longitudinal
 from .models._greybox import GreyBoxModel
@@ -103,9 +104,13 @@ def evaluate(
     """
     local = {}
     if refit_local and model.local:
-        r = fit(model.with_free(model.local), exp, names=[name], start="model")
-        model = r.model
-        local = {k: float(model.params[k]) for k in model.local}
+        # bias terms enter affinely: a weighted linear solve (no second estimator to compile);
+        # the full ML fit of the biases otherwise
+        local = refit_local_affine(model, exp)
+        if local is None:
+            r = fit(model.with_free(model.local), exp, names=[name], start="model")
+            local = {k: float(r.model.params[k]) for k in model.local}
+        model = model.with_params(local)
     xs, ys = simulate(model, exp)
     fm, fs = {}, {}
     if model.forces is not None and exp.forces is not None:

@@ -30,6 +30,7 @@ from .data._trim import input_column
 from .decompose._filters import lowpass
 from .decompose._frequency import check_flapping_frequency, flapping_phase
 from .decompose._split import flapping_part
+from .estimate._local import refit_local_affine
 from .estimate._output_error import FitResult, fit
 from .models._combined import combined, force_parts
 from .models._fourier import (
@@ -541,68 +542,23 @@ def _cycle_models(cycle: Identification) -> list[GreyBoxModel]:
     return [r.model for r in cycle.fits]
 
 
-def _refit_local_linear(model: GreyBoxModel, exp: Experiment, *, passes: int = 20):
-    """ML estimate of the bias terms (`model.local`) on one flight, all else held, for a model
-    whose outputs are affine in them (Eq. 7 with biases: `x' = A x + B u + b`).
-
-    The same estimate as `fwid.fit(model.with_free(model.local), ...)` (Eqs. 10-11 with R
-    relaxed), computed from `1 + len(local)` simulations by iteratively re-weighted linear
-    least squares, so validating the cycle-averaged part does not compile a second estimator.
-
-    **Returns:** the bias values by name, or `None` when the outputs are not affine in them.
-    """
-    local = list(model.local)
-    b0 = {k: 0.0 for k in local}
-    step = 1e-2
-
-    def sim(values):
-        return np.asarray(simulate(model.with_params(values), exp)[1])
-
-    y0 = sim(b0)
-    S = np.stack([(sim({**b0, k: step}) - y0) / step for k in local], axis=-1)  # (n, ny, p)
-    z = np.asarray(exp.z)
-    keep = np.asarray(exp.mask) > 0
-    z, y0, S = z[keep], y0[keep], S[keep]
-    r0 = z - y0
-    b = np.zeros(len(local))
-    R = r0.T @ r0 / r0.shape[0]
-    for _ in range(passes):
-        Linv = np.linalg.inv(np.linalg.cholesky(R + 1e-300 * np.eye(R.shape[0])))
-        A = np.einsum("ij,njp->nip", Linv, S).reshape(-1, len(local))
-        rhs = (r0 @ Linv.T).reshape(-1)
-        b_new, *_ = np.linalg.lstsq(A, rhs, rcond=None)
-        v = r0 - np.einsum("njp,p->nj", S, b_new)
-        R = v.T @ v / v.shape[0]
-        done = np.allclose(b_new, b, rtol=1e-10, atol=1e-14)
-        b = b_new
-        if done:
-            break
-    values = dict(zip(local, b.tolist()))
-    # affine? the prediction must match a simulation at the estimate
-    y_hat = sim(values)[keep]
-    pred = y0 + np.einsum("njp,p->nj", S, b)
-    if not np.allclose(y_hat, pred, rtol=1e-6, atol=1e-9 * (np.abs(y_hat).max() + 1e-300)):
-        return None
-    return values
-
-
 def _local_of(model: GreyBoxModel, flight: Flight, cutoff: float) -> dict:
     """A flight's bias terms for a given cycle-averaged model (ML, all else held)."""
     if not model.local:
         return {}
     exp = averaged(flight, model, cutoff)
-    local = _refit_local_linear(model, exp)
+    local = refit_local_affine(model, exp)
     return local if local is not None else evaluate(model, exp, flight.name).local_params
 
 
 def _validate_cycle(cycle: Identification, flights, cutoff) -> Identification:
     """The cycle-averaged validation of [`fwid.identify`][] (summary model, bias terms
-    re-estimated per flight), with the biases from `_refit_local_linear`."""
+    re-estimated per flight), with the biases from `fwid.estimate.refit_local_affine`."""
     out = []
     model = cycle.model
     for f in flights:
         exp = averaged(f, model, cutoff)
-        local = _refit_local_linear(model, exp) if model.local else {}
+        local = refit_local_affine(model, exp) if model.local else {}
         if local is None:  # not affine in the biases: the general (slower) path
             out.append(evaluate(model, exp, f.name))
             continue

@@ -5,3 +5,4 @@ from ._uncertainty import (
     coloured_residual_middle as coloured_residual_middle,
     correlation as correlation,
 )
+from ._local import refit_local_affine as refit_local_affine
