@@ -18,8 +18,8 @@ from scipy.integrate import solve_ivp
 import fwid
 from fwid import FitResult, Identification
 from fwid._identify import averaged, evaluate
+from fwid.estimate import refit_local_affine
 from fwid._identify_flapping import (
-    _refit_local_linear,
     flapping_report,
     identify_combined,
     identify_flapping_model,
@@ -203,7 +203,7 @@ def test_bias_refit_is_the_ml_estimate(data):
     _, _, val = data
     model = longitudinal(dict(TABLE1, bq=0.01, bu=-0.003))
     exp = averaged(fwid.load_flights(val)[0], model, 5.0)
-    lin = _refit_local_linear(model, exp)
+    lin = refit_local_affine(model, exp)
     model_free = model.with_free(model.local)
     # the estimator's fixed point: the gradient of the ML cost at the linear solution is ~0
     y = np.asarray(fwid.simulate(model.with_params(lin), exp)[1])
