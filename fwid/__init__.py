@@ -70,7 +70,17 @@ from .estimate import (
     fit_each as fit_each,
     least_squares_start as least_squares_start,
 )
-from .validate import eigenvalues as eigenvalues, fit_metrics as fit_metrics, modes as modes
+from .validate import (
+    cutoff_cost as cutoff_cost,
+    eigenvalue_sensitivity as eigenvalue_sensitivity,
+    eigenvalues as eigenvalues,
+    estimate_sensitivity_to_cutoff as estimate_sensitivity_to_cutoff,
+    fit_metrics as fit_metrics,
+    metric_sensitivity as metric_sensitivity,
+    modes as modes,
+    output_sensitivity as output_sensitivity,
+    rank_sensitivities as rank_sensitivities,
+)
 from ._identify import (
     FlightFit as FlightFit,
     Identification as Identification,
