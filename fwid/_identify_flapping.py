@@ -42,7 +42,7 @@ from .models._fourier import (
     fourier_structure,
 )
 from .models._greybox import GreyBoxModel
-from .report._json import pooled_metrics
+from .report._json import add_validation, pooled_metrics
 from .report._spectra import harmonic_amplitudes
 from .simulate._experiment import Experiment, experiment
 from .simulate._simulate import simulate
@@ -822,13 +822,7 @@ def combined_report(ident: CombinedIdentification) -> dict:
         "flapping": flap,
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
     }
-    if ident.validation:
-        report["metrics"]["validation"] = pooled_metrics(ident.validation)
-        report["validation_flights"] = [
-            {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
-            for v in ident.validation
-        ]
-    return report
+    return add_validation(report, ident.validation)
 
 
 def _cycle_names(model: GreyBoxModel) -> set[str]:

@@ -107,6 +107,17 @@ def modes_spread(per_flight_modes: list[list[dict]]) -> dict:
     return out
 
 
+def add_validation(report: dict, validation) -> dict:
+    """Add the validation flights' metrics (pooled, and per flight) to a report."""
+    if validation:
+        report["metrics"]["validation"] = pooled_metrics(validation)
+        report["validation_flights"] = [
+            {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
+            for v in validation
+        ]
+    return report
+
+
 def identification_report(ident) -> dict:
     """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict."""
     model = ident.model
@@ -122,12 +133,7 @@ def identification_report(ident) -> dict:
         "trim_and_vehicle": ident.consts,
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
     }
-    if ident.validation:
-        report["metrics"]["validation"] = pooled_metrics(ident.validation)
-        report["validation_flights"] = [
-            {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
-            for v in ident.validation
-        ]
+    add_validation(report, ident.validation)
     if len(ident.fits) == 1:
         block = _fit_block(ident, ident.fit, ident.estimation[0], eigs)
         report["parameters"] = block["parameters"]
