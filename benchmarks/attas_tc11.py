@@ -17,7 +17,6 @@ import time
 from pathlib import Path
 
 import jax.numpy as jnp
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
