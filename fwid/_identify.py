@@ -166,9 +166,7 @@ def identify(
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
-            local = {k: float(fits[0].theta[fits[0].names.index(f"{k}@{i}")])
-                     for k in model.local if f"{k}@{i}" in fits[0].names}
-            estimation.append(evaluate(summary.with_params(local), e, n, refit_local=False))
+            estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
     else:
         fits = fit_each(model, exps, names=names, progress=progress)
         summary = _mean_model(model, fits)

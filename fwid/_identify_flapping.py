@@ -530,15 +530,8 @@ class CombinedIdentification:
 
 def _cycle_models(cycle: Identification) -> list[GreyBoxModel]:
     """The cycle-averaged model of each estimation flight, with that flight's biases."""
-    model = cycle.model
     if len(cycle.fits) == 1:
-        r = cycle.fits[0]
-        out = []
-        for i in range(len(cycle.flights)):
-            local = {k: float(r.theta[r.names.index(f"{k}@{i}")])
-                     for k in model.local if f"{k}@{i}" in r.names}
-            out.append(r.model.with_params(local))
-        return out
+        return [cycle.fits[0].flight_model(i) for i in range(len(cycle.flights))]
     return [r.model for r in cycle.fits]
 
 

@@ -72,6 +72,12 @@ class FitResult(eqx.Module):
     def params(self) -> dict:
         return self.model.params
 
+    def flight_model(self, i: int) -> GreyBoxModel:
+        """The model with flight `i`'s own local parameters (bias terms) of a joint fit."""
+        local = {k: self.theta[self.names.index(f"{k}@{i}")]
+                 for k in self.model.local if f"{k}@{i}" in self.names}
+        return self.model.with_params(local)
+
     def table(self) -> dict[str, dict[str, float]]:
         """`{name: {value, std, std_cr, rel_std_pct}}`, Table 1's layout."""
         out = {}
@@ -160,9 +166,6 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     scale = jnp.where(colnorm > 0, 1.0 / colnorm, jnp.maximum(jnp.abs(theta0), 1.0))
     s0 = theta0 / scale
 
-    def params_of(s):
-        return _merge_batch(model, s * scale, n_local_batch)
-
     def whitened(s, Linv):
         w = (raw(s * scale)) @ Linv.T
         return jnp.where(jnp.isfinite(w), w, jnp.inf)
@@ -196,7 +199,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
 
     def per_sample(s):
-        return _raw_residuals(model, params_of(s), batch) @ Linv.T  # (B, n, ny)
+        return raw(s * scale) @ Linv.T  # (B, n, ny)
 
     w = per_sample(s)
     Sw = -jax.jacfwd(per_sample)(s) / scale  # d(whitened y)/d theta: (B, n, ny, p)
@@ -211,8 +214,8 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     cov_cr = covariance(M)
     cov_c = covariance(M, middle)
     finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
-    return dict(theta=s * scale, R=R, cost=cost, finite=finite, passes=passes, steps=steps, hist=hist, converged=done,
-                M=M, cov_cr=cov_cr, cov=cov_c)
+    return dict(theta=s * scale, R=R, cost=cost, finite=finite, passes=passes, steps=steps,
+                hist=hist, converged=done, M=M, cov_cr=cov_cr, cov=cov_c)
 
 
 _fit_batch_jit = eqx.filter_jit(_fit_batch)

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from ..decompose._filters import highpass
 from ..decompose._frequency import flapping_phase
+from ._figures import _scaled_input
 
 _DEG = {"q", "p", "r", "theta", "phi", "psi", "alpha", "de", "dr"}
 _UNITS = {"q": "deg/s", "p": "deg/s", "r": "deg/s", "theta": "deg", "phi": "deg",
@@ -107,14 +108,6 @@ def harmonic_amplitudes(
     return amp.reshape(*x.shape[:-1], n)
 
 
-def _scaled(u, target):
-    lo, hi = np.nanmin(target), np.nanmax(target)
-    span = np.ptp(u)
-    if span == 0:
-        return np.full_like(u, (lo + hi) / 2)
-    return lo + (u - np.min(u)) / span * (hi - lo)
-
-
 def _unit(k):
     return _UNITS.get(k, "")
 
@@ -189,7 +182,7 @@ def plot_time_and_spectrum(
         ax.plot(t, zm, color="0.2", lw=0.9, label=measured_label)
         ax.plot(t, ys, color="C3", lw=1.0, ls="--", label=model_label)
         if u is not None and np.ptp(u) > 0:
-            ax.plot(t, _scaled(np.asarray(u), zm), color="C0", lw=0.8, alpha=0.6,
+            ax.plot(t, _scaled_input(np.asarray(u), zm), color="C0", lw=0.8, alpha=0.6,
                     label=f"Scaled {u_name} input")
         unit = _unit(k)
         ax.set_ylabel(f"{k} [{unit}]" if unit else k)
