@@ -70,6 +70,11 @@ from .estimate import (
     fit_each as fit_each,
     least_squares_start as least_squares_start,
 )
+from .diagnose import (
+    CATALOGUE as CATALOGUE,
+    Diagnosis as Diagnosis,
+    diagnose as diagnose,
+)
 from .validate import (
     cutoff_cost as cutoff_cost,
     eigenvalue_sensitivity as eigenvalue_sensitivity,

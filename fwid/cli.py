@@ -38,6 +38,14 @@ def _parser() -> argparse.ArgumentParser:
     i.add_argument("--out", default=None, help="folder for report.json and the figures")
     i.add_argument("--cutoff", type=float, default=5.0, help="cycle-averaged / flapping split [Hz]")
     i.add_argument("--quiet", action="store_true")
+
+    d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "
+                                        "how far the held-out error shrinks once it is added")
+    d.add_argument("--train", nargs="+", required=True, metavar="DATA")
+    d.add_argument("--test", nargs="+", required=True, metavar="DATA")
+    d.add_argument("--axis", choices=("lon", "lat"), default="lon")
+    d.add_argument("--out", default=None, help="folder for diagnosis.json and the figure")
+    d.add_argument("--quiet", action="store_true")
     return p
 
 
@@ -84,6 +92,26 @@ def _identify(args) -> int:
     return 0
 
 
+def _diagnose(args) -> int:
+    import fwid
+    from .report import diagnosis_summary, plot_gap_map, write_json
+
+    t0 = time.perf_counter()
+    train = fwid.load_flights(*args.train)
+    test = fwid.load_flights(*args.test)
+    say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
+    diag = fwid.diagnose(train, test, axis=args.axis, progress=say)
+    print(diagnosis_summary(diag))
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_gap_map(diag, path=out / "gap_map.png")
+        write_json(out / "diagnosis.json", diag.to_json())
+        print(f"\nfwid: diagnosis.json and gap_map.png in {out}/ "
+              f"({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
 def main(argv=None) -> int:
     from ._errors import InputError
 
@@ -93,6 +121,8 @@ def main(argv=None) -> int:
             return _simulate(args)
         if args.command == "identify":
             return _identify(args)
+        if args.command == "diagnose":
+            return _diagnose(args)
     except InputError as e:
         print(f"fwid: error: {e}", file=sys.stderr)
         return 2

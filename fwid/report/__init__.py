@@ -15,3 +15,4 @@ from ._spectra import (
     plot_superposition as plot_superposition,
     plot_time_and_spectrum as plot_time_and_spectrum,
 )
+from ._diagnosis import diagnosis_summary as diagnosis_summary, plot_gap_map as plot_gap_map

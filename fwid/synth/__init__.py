@@ -24,6 +24,7 @@ from ._delfly import (
 from ._effects import (
     EFFECT_COEFFICIENTS as EFFECT_COEFFICIENTS,
     EFFECTS as EFFECTS,
+    OUT_OF_CATALOGUE as OUT_OF_CATALOGUE,
     Effect as Effect,
 )
 from ._inputs import (

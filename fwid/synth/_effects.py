@@ -21,6 +21,13 @@ Effects scale linearly with `strength` (the actuator time constant too).
   (cycle-averaged) one through a first-order lag, `d_eff' = (d_cmd - d_eff) / tau` with
   `tau = s * 0.05 s`; the measured columns `de`, `dr` keep the commanded deflection.
 
+Outside the catalogue, to check that the diagnosis does not name a catalogue effect for
+something else (`OUT_OF_CATALOGUE`):
+
+- `turbulence`: wind gusts `ug, wg, vg` (white noise through a first-order filter at
+  `GUST_BANDWIDTH` Hz, RMS `s * GUST_RMS` m/s) act through the vehicle's own velocity
+  derivatives, `dF = Fx [ug, wg, vg]`: unmeasured loads, no new physics.
+
 All effects act on the cycle-averaged states (the flapping oscillation is not rectified
 into a trim shift). The coefficients are module constants (`COEFFICIENTS`) and are written
 to each flight's sidecar under `truth.effect_coefficients`.
@@ -34,6 +41,11 @@ import numpy as np
 
 #: Effect names (CONTRACTS section 4).
 EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics")
+#: Effects the simulator can inject that are not in the catalogue (see the module docstring).
+OUT_OF_CATALOGUE = ("turbulence",)
+#: Gust RMS [m/s] at strength 1 and the bandwidth [Hz] of the gust filter (`turbulence`).
+GUST_RMS = 0.06
+GUST_BANDWIDTH = 1.0
 
 #: Coefficients of each effect at strength 1 (SI units; states are perturbations).
 COEFFICIENTS: dict[str, dict[str, float]] = {
@@ -49,6 +61,7 @@ COEFFICIENTS: dict[str, dict[str, float]] = {
         "md": 2.0e-3,
     },
     "actuator-dynamics": {"tau": 0.05},
+    "turbulence": {"gust_rms": GUST_RMS},
 }
 #: Public alias of `COEFFICIENTS` (re-exported by `fwid.synth`).
 EFFECT_COEFFICIENTS = COEFFICIENTS
@@ -62,8 +75,9 @@ class Effect:
     strength: float = 1.0
 
     def __post_init__(self):
-        if self.name not in EFFECTS:
-            raise ValueError(f"unknown effect {self.name!r}; choose one of {', '.join(EFFECTS)}")
+        if self.name not in EFFECTS + OUT_OF_CATALOGUE:
+            raise ValueError(f"unknown effect {self.name!r}; choose one of "
+                             f"{', '.join(EFFECTS + OUT_OF_CATALOGUE)}")
         if not np.isfinite(self.strength) or self.strength < 0:
             raise ValueError(f"effect strength must be a finite number >= 0, got {self.strength}")
 
@@ -111,6 +125,21 @@ class Effect:
         if self.name != "actuator-dynamics" or not self.active:
             return None
         return self.coefficients()["tau"]
+
+    def gusts(self, t: np.ndarray, seed: int) -> np.ndarray | None:
+        """Gust velocities `(n, 3)` = `[ug, wg, vg]` at times `t` (`turbulence`), else `None`.
+        Drawn from their own generator, so the flight's other random draws do not change."""
+        if self.name != "turbulence" or not self.active:
+            return None
+        rng = np.random.default_rng([seed, 7919])
+        h = t[1] - t[0]
+        a = np.exp(-2 * np.pi * GUST_BANDWIDTH * h)
+        w = rng.standard_normal((len(t), 3)) * np.sqrt(1 - a * a)
+        g = np.zeros_like(w)
+        g[0] = rng.standard_normal(3)
+        for k in range(1, len(t)):  # first-order Gauss-Markov process, stationary from t = 0
+            g[k] = a * g[k - 1] + w[k]
+        return g * self.coefficients()["gust_rms"]
 
     def truth(self) -> dict:
         """What the sidecar records about the effect."""

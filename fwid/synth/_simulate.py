@@ -403,6 +403,15 @@ def simulate_flight(
         F_mid = flapping_loads(flap.phase(t_int[:-1] + 0.5 * h), vehicle)
     else:
         F_int = F_mid = np.zeros((N + 1, 6))
+    gusts = eff.gusts(t_int, seed)
+    gust_loads = None
+    if gusts is not None:  # unmeasured loads: through the flapping-response channel (linear)
+        Fx_, _ = aero_matrices(vehicle)
+        cols = [STATES.index(c) for c in ("u", "w", "v")]
+        gl = gusts @ Fx_[:, cols].T
+        F_int = F_int + gl
+        F_mid = F_mid + 0.5 * (gl[1:] + gl[:-1])
+        gust_loads = gl[::substeps]
     xc, xo, ue = _integrate(vehicle, eff, t_int, u_int, F_int, F_mid, xc0, xo0, flapping)
     xc, xo = xc[::substeps], xo[::substeps]
     x = xc + xo
@@ -418,6 +427,8 @@ def simulate_flight(
         F_tv = flapping_loads(phase, vehicle) * np.asarray(gain)[..., None]
     extra = eff.extra_loads(xc, u_eff)
     dF = dF + F_tv + (0.0 if extra is None else extra)
+    if gust_loads is not None:
+        dF = dF + gust_loads
     load0 = np.array([trim[k + "0"] for k in FORCES])
     loads_true = {k: load0[i] + dF[:, i] for i, k in enumerate(FORCES)}
     loads_flap = {k: F_tv[:, i] for i, k in enumerate(FORCES)}

@@ -14,12 +14,21 @@ from ._simulate import COLUMNS, DEFAULT_AMPLITUDE, simulate_flight
 INPUT_CYCLE = ("3211", "doublet", "211", "pulse")
 
 
-def write_csv(path, flight: dict) -> Path:
+def write_csv(path, flight: dict, truth_columns: bool = False) -> Path:
     """Write one flight (a `simulate_flight` result) as CSV with the `COLUMNS` header;
-    17 significant digits, so noise-free flights survive the round trip exactly."""
+    17 significant digits, so noise-free flights survive the round trip exactly. With
+    `truth_columns`, the exact loads are added as extra columns `X_true, ..., N_true` (which
+    fwid's loader keeps and every model ignores): the error floor of the true model, for
+    benchmarks."""
     path = Path(path)
-    data = np.column_stack([np.asarray(flight[c], dtype=float) for c in COLUMNS])
-    np.savetxt(path, data, delimiter=",", header=",".join(COLUMNS), comments="", fmt="%.17g")
+    names = list(COLUMNS)
+    cols = [np.asarray(flight[c], dtype=float) for c in COLUMNS]
+    if truth_columns:
+        for k, v in flight["meta"]["loads_true"].items():
+            names.append(f"{k}_true")
+            cols.append(np.asarray(v, dtype=float))
+    data = np.column_stack(cols)
+    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
     return path
 
 
@@ -50,6 +59,7 @@ def write_flights(
     seed: int = 0,
     effect: str = "none",
     strength: float = 1.0,
+    truth_columns: bool = False,
     **kw,
 ) -> list[Path]:
     """Simulate `n_flights` flights and write `lon_0.csv, lon_1.csv, ...` (or `lat_*`), their
@@ -61,6 +71,7 @@ def write_flights(
     simulation seed is drawn from the same generator. Any of `input`, `amplitude`, `start`
     or `seed`-independent options of `simulate_flight` given in `kw` (e.g. `noise`,
     `flapping`, `drift`, `duration`) apply to every flight. Deterministic by `seed`.
+    `truth_columns`: also write the exact loads (`write_csv`).
 
     **Returns:** the CSV paths, in order.
     """
@@ -79,7 +90,7 @@ def write_flights(
         args = {"input": INPUT_CYCLE[i % len(INPUT_CYCLE)], "amplitude": amp, "start": start}
         args.update(kw)
         flight = simulate_flight(axis=axis, seed=sim_seed, effect=effect, strength=strength, **args)
-        csv = write_csv(out / f"{axis}_{i}.csv", flight)
+        csv = write_csv(out / f"{axis}_{i}.csv", flight, truth_columns)
         write_sidecar(csv.with_suffix(".json"), flight)
         paths.append(csv)
     return paths

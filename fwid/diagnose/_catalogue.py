@@ -1,0 +1,143 @@
+"""The catalogue of unmodelled effects (CONTRACTS section 4) as augmentations of the model.
+
+Each `Effect` adds a group of regressors to the cycle-averaged linear load model of Eqs. (2-6)
+(`base_columns`), shared by all flights. None of them is tuned to a particular simulator: each
+is the generic first term of its physical family.
+
+- `flap-coupling`: the flapping loads of Eq. (12) change with the slow motion. The flight's own
+  flapping series `h(phi)` (and its phase derivative `h'`, a shift of the harmonics) is
+  multiplied by each cycle-averaged state and input: `x h`, `x h'` (amplitude and phase
+  modulation, the sidebands `n f +- f_manoeuvre` of a linear time-periodic system).
+- `nonlinear-aero`: second-order terms of the cycle-averaged states of the load's axis:
+  `x^2`, `x|x|` and the cross products (the next terms of the Taylor series behind Eq. 2;
+  `|x| x` is quadratic drag).
+- `lon-lat-coupling`: the other axis's states and control drive the load (Eqs. 2 and 5 with
+  the cross terms the paper leaves out).
+- `actuator-dynamics`: the deflection that acts is the measured one through a first-order lag
+  or a pure delay; the column `d_eff - d` is added, with the time constant chosen from
+  `LAGS` by the training fit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+from scipy.signal import lfilter, lfilter_zi
+
+from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, Signals, other
+
+#: Time constants / delays [s] tried by `actuator-dynamics`.
+LAGS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2)
+
+
+def axis_of(load: str) -> str:
+    return "lon" if load in AXIS_LOADS["lon"] else "lat"
+
+
+def _slow(s: Signals, name: str) -> np.ndarray:
+    return s.slow.get(name, np.zeros(s.n))
+
+
+def base_columns(s: Signals, load: str, band: str) -> np.ndarray:
+    """Global regressors of the baseline model of `load` in `band`: for the cycle-averaged
+    part, the cycle-averaged states and control of its axis (Eqs. 2 and 5); the flapping part
+    is the flight's own Fourier series (Eq. 12, local) and has none."""
+    if band == "flapping":
+        return np.zeros((s.n, 0))
+    a = axis_of(load)
+    return np.stack([_slow(s, x) for x in AXIS_STATES[a] + (AXIS_INPUT[a],)], axis=1)
+
+
+def _flap_coupling(s, load, variant, h, dh):
+    xs = [_slow(s, x) for x in AXIS_STATES["lon"] + AXIS_STATES["lat"] + ("de", "dr")]
+    return np.stack([x * h for x in xs] + [x * dh for x in xs], axis=1)
+
+
+def _nonlinear(s, load, variant, h, dh):
+    xs = [_slow(s, x) for x in AXIS_STATES[axis_of(load)]]
+    cols = []
+    for x in xs:
+        cols += [x * x, x * np.abs(x)]
+    for i in range(len(xs)):
+        for j in range(i + 1, len(xs)):
+            cols.append(xs[i] * xs[j])
+    return np.stack(cols, axis=1)
+
+
+def _coupling(s, load, variant, h, dh):
+    a = other(axis_of(load))
+    return np.stack([_slow(s, x) for x in AXIS_STATES[a] + (AXIS_INPUT[a],)], axis=1)
+
+
+def lagged(x: np.ndarray, dt: float, kind: str, tau: float) -> np.ndarray:
+    """`x` through a first-order lag (`kind="lag"`, time constant `tau`) or delayed by `tau`
+    (`kind="delay"`); the signal is taken as steady before its first sample."""
+    if kind == "delay":
+        t = np.arange(len(x)) * dt
+        return np.interp(t - tau, t, x)
+    a = np.exp(-dt / tau)
+    # y_k = a y_{k-1} + (1 - a) (x_k + x_{k-1}) / 2, started steady at x_0
+    b = (0.5 * (1.0 - a), 0.5 * (1.0 - a))
+    y, _ = lfilter(b, (1.0, -a), x, zi=lfilter_zi(b, (1.0, -a)) * x[0])
+    return y
+
+
+def _actuator(s, load, variant, h, dh):
+    kind, tau = variant
+    d = _slow(s, AXIS_INPUT[axis_of(load)])
+    return (lagged(d, s.dt, kind, tau) - d)[:, None]
+
+
+@dataclasses.dataclass(frozen=True)
+class Effect:
+    """One candidate effect: `columns(signals, load, variant, h, dh)` returns the regressors
+    it adds to the model of `load` in `band` (`h`, `dh`: the flight's flapping series of that
+    load and its phase derivative); `variants` are the discrete choices fitted by trying each
+    (e.g. time constants)."""
+
+    name: str
+    description: str
+    band: str
+    columns: Callable = dataclasses.field(repr=False)
+    variants: tuple = (None,)
+
+
+CATALOGUE: tuple[Effect, ...] = (
+    Effect(
+        "flap-coupling",
+        "flapping loads modulated by the body motion and inputs (time scales coupled)",
+        "flapping",
+        _flap_coupling,
+    ),
+    Effect(
+        "nonlinear-aero",
+        "cycle-averaged loads quadratic in the states (x^2, x|x|, cross products)",
+        "averaged",
+        _nonlinear,
+    ),
+    Effect(
+        "lon-lat-coupling",
+        "the other axis's states and control drive the loads",
+        "averaged",
+        _coupling,
+    ),
+    Effect(
+        "actuator-dynamics",
+        "the acting deflection lags (first order) or trails (delay) the measured one",
+        "averaged",
+        _actuator,
+        tuple(("lag", t) for t in LAGS) + tuple(("delay", t) for t in LAGS),
+    ),
+)
+
+#: Effect names the diagnosis can return (with "none").
+EFFECT_NAMES = tuple(e.name for e in CATALOGUE)
+
+
+def get_effect(name: str) -> Effect:
+    for e in CATALOGUE:
+        if e.name == name:
+            return e
+    raise ValueError(f"unknown effect {name!r}; choose from {', '.join(EFFECT_NAMES)}")

@@ -1,0 +1,84 @@
+"""Least squares with flight-local terms: the fast engine of the gap diagnosis.
+
+Every load is modelled, per flight (or block), as
+
+    y = G theta + L lambda_k + e,
+
+where `G` holds the global regressors (the cycle-averaged model of Eqs. 2-6 and any
+candidate effect's columns, shared by every flight) and `L` the local ones: a constant (the
+flight's trim load and bias) and the 3-harmonic Fourier series of Eq. (12) in the measured
+flapping phase. The local part is re-estimated on every flight, held-out ones included, as
+fwid does with bias terms: a flight's flapping phase origin and trim are its own, the
+physics in `theta` is not.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+#: Harmonics of the local flapping series (Eq. 12).
+HARMONICS = 3
+
+
+def local_design(phase: np.ndarray, harmonics: int = HARMONICS) -> np.ndarray:
+    """`[1, sin(phi), cos(phi), ..., sin(n phi), cos(n phi)]`, shape `(n, 1 + 2 harmonics)`."""
+    cols = [np.ones_like(phase)]
+    for k in range(1, harmonics + 1):
+        cols += [np.sin(k * phase), np.cos(k * phase)]
+    return np.stack(cols, axis=1)
+
+
+def harmonic_series(phase: np.ndarray, coef: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The flapping series of Eq. (12) with local coefficients `coef` (as `local_design`,
+    constant first), and its derivative with respect to the phase."""
+    h = np.zeros_like(phase)
+    dh = np.zeros_like(phase)
+    for k in range(1, (len(coef) - 1) // 2 + 1):
+        a, b = coef[2 * k - 1], coef[2 * k]
+        s, c = np.sin(k * phase), np.cos(k * phase)
+        h += a * s + b * c
+        dh += k * (a * c - b * s)
+    return h, dh
+
+
+class Projector:
+    """Removes a flight's local terms: `x - Q Q^T x` with `Q` an orthonormal basis of `L`."""
+
+    def __init__(self, local: np.ndarray):
+        self.q, _ = np.linalg.qr(local)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return x - self.q @ (self.q.T @ x)
+
+    def coefficients(self, local: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Least-squares local coefficients of `x` (for `harmonic_series`)."""
+        return np.linalg.lstsq(local, x, rcond=None)[0]
+
+
+def solve(
+    designs: Sequence[np.ndarray], targets: Sequence[np.ndarray], projectors: Sequence[Projector]
+) -> np.ndarray:
+    """Global coefficients `theta` minimising `sum_k |P_k (y_k - G_k theta)|^2`.
+
+    Columns are scaled to unit norm first and rank deficiency (a column that never moves,
+    e.g. the rudder in an elevator manoeuvre) is handled by the pseudo-inverse: such a
+    column gets a zero coefficient.
+    """
+    a = np.concatenate([p(g) for p, g in zip(projectors, designs)], axis=0)
+    b = np.concatenate([p(y) for p, y in zip(projectors, targets)], axis=0)
+    if a.shape[1] == 0:
+        return np.zeros(0)
+    norms = np.linalg.norm(a, axis=0)
+    live = norms > 1e-12 * max(float(norms.max()), 1e-300)
+    theta = np.zeros(a.shape[1])
+    if np.any(live):
+        sol = np.linalg.lstsq(a[:, live] / norms[live], b, rcond=1e-10)[0]
+        theta[live] = sol / norms[live]
+    return theta
+
+
+def residual(design: np.ndarray, target: np.ndarray, projector: Projector, theta) -> np.ndarray:
+    """The flight's residual once `theta` is applied and its local terms are re-estimated."""
+    return projector(target - design @ theta) if design.shape[1] else projector(target)

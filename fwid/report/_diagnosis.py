@@ -1,0 +1,112 @@
+"""The diagnosis in words (terminal) and in one figure (the gap map and the shrink)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..diagnose import BAND_NAMES, Diagnosis
+
+_BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
+
+
+def diagnosis_summary(d: Diagnosis) -> str:
+    """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
+    loc = d.localisation
+    worst = max(loc["by_output"], key=lambda ld: loc["by_output"][ld]["unexplained_pct"])
+    bands = loc["by_band"][worst]
+    top_band = max(bands, key=bands.get)
+    tm = loc["by_time"][worst]
+    st = loc["by_state"][worst]
+    lines = [
+        f"fwid diagnose ({d.axis}): {len(d.train)} training, {len(d.test)} test flights, "
+        f"{len(d.folds)} cross-validation folds",
+        f"  gap: largest in {worst} ({loc['by_output'][worst]['unexplained_pct']:.1f} % "
+        f"unexplained), {bands[top_band]:.0f} % of it in band {top_band}; manoeuvre/steady RMS "
+        f"{tm['manoeuvre_to_steady']:.2f}"
+        + (f"; grows with {st['top']} (x{st['top_spread']:.1f} across its bins)"
+           if st["top"] else ""),
+    ]
+    if d.verdict == "none":
+        lines.append("  VERDICT: none (no candidate effect improves the held-out fit significantly)")
+    else:
+        c = d.candidate(d.verdict)
+        change = ", ".join(
+            f"{ld} {c['test_rms_before'][ld]:.3g} -> {c['test_rms_after'][ld]:.3g}"
+            for ld in c["affected"])
+        lines.append(f"  VERDICT: {d.verdict}"
+                     + (f" ({c['variant']})" if c["variant"] else "")
+                     + f": held-out RMS of {'/'.join(c['affected'])} shrinks "
+                     f"{c['shrink_pct']:.1f} % ({change})")
+    lines.append(f"  {'candidate':<18} {'signif.':>7} {'shrink %':>8}  evidence (CV gain %, t)")
+    for c in d.candidates:
+        ev = c["evidence"]
+        best = sorted(ev, key=lambda ld: -ev[ld]["t"])[:2]
+        lines.append(
+            f"  {c['effect']:<18} {('yes' if c['significant'] else 'no'):>7} "
+            f"{c['shrink_pct']:8.1f}  "
+            + ", ".join(f"{ld}: {ev[ld]['cv_gain_pct']:.1f} %, t={ev[ld]['t']:.1f}" for ld in best)
+        )
+    return "\n".join(lines)
+
+
+def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
+    """Where the held-out error lives (share of each load's residual energy by band; RMS by
+    time; mean square over the bins of the most telling state) and what the verdict (or the
+    best candidate) removes, per load."""
+    loc = d.localisation
+    loads = list(loc["by_output"])
+    fig = Figure(figsize=(12, 7.5), layout="constrained")
+    ax = fig.subplots(2, 2)
+
+    heat = np.array([[loc["by_band"][ld][b] for b in BAND_NAMES] for ld in loads])
+    im = ax[0, 0].imshow(heat, aspect="auto", cmap="magma_r", vmin=0, vmax=100)
+    ax[0, 0].set_xticks(range(len(BAND_NAMES)), _BAND_LABELS)
+    ax[0, 0].set_yticks(range(len(loads)),
+                        [f"{ld} ({loc['by_output'][ld]['unexplained_pct']:.1f} %)" for ld in loads])
+    for i in range(len(loads)):
+        for j in range(len(BAND_NAMES)):
+            ax[0, 0].text(j, i, f"{heat[i, j]:.0f}", ha="center", va="center", fontsize=7,
+                          color="w" if heat[i, j] > 50 else "k")
+    fig.colorbar(im, ax=ax[0, 0], label="% of residual energy")
+    ax[0, 0].set_title("held-out error by load (% unexplained) and band")
+
+    x = np.arange(len(loads))
+    keys = (("steady_rms", "steady"), ("manoeuvre_rms", "manoeuvre"),
+            ("after_input_rms", f"<1 s after input"))
+    for k, (key, label) in enumerate(keys):
+        rel = [loc["by_time"][ld][key] / loc["by_output"][ld]["rms"] for ld in loads]
+        ax[0, 1].bar(x + (k - 1) * 0.27, rel, 0.27, label=label)
+    ax[0, 1].axhline(1.0, color="k", lw=0.8)
+    ax[0, 1].set_xticks(x, loads)
+    ax[0, 1].set_ylabel("RMS / overall RMS")
+    ax[0, 1].set_title("held-out error in time")
+    ax[0, 1].legend(fontsize=8)
+
+    for ld in loads:
+        st = loc["by_state"][ld]
+        if st["top"]:
+            rel = st["bins"][st["top"]]["relative_ms"]
+            ax[1, 0].plot(range(1, len(rel) + 1), rel, "o-", label=f"{ld} vs {st['top']}")
+    ax[1, 0].axhline(1.0, color="k", lw=0.8)
+    ax[1, 0].set_xlabel("quantile bin of the state (low to high)")
+    ax[1, 0].set_ylabel("mean square / overall")
+    ax[1, 0].set_title("held-out error over the flight state (most telling state per load)")
+    ax[1, 0].legend(fontsize=8)
+
+    c = d.candidate(d.verdict) if d.verdict != "none" else d.candidates[0]
+    before = [c["test_rms_before"][ld] for ld in loads]
+    after = [c["test_rms_after"][ld] / b if b > 0 else 1.0 for ld, b in zip(loads, before)]
+    ax[1, 1].bar(x, after, color=["C2" if ld in c["affected"] else "C7" for ld in loads])
+    ax[1, 1].axhline(1.0, color="k", lw=0.8)
+    ax[1, 1].set_xticks(x, loads)
+    ax[1, 1].set_ylabel("held-out RMS after / before")
+    ax[1, 1].set_title(f"{'verdict' if d.verdict != 'none' else 'best candidate (not significant)'}"
+                       f": {c['effect']} (shrink {c['shrink_pct']:.1f} %)")
+    ax[1, 1].set_ylim(0, 1.1)
+    fig.suptitle(f"fwid diagnose ({d.axis}): verdict {d.verdict}")
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig
