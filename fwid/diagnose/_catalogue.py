@@ -41,13 +41,13 @@ def _slow(s: Signals, name: str) -> np.ndarray:
 
 
 def base_columns(s: Signals, load: str, band: str) -> np.ndarray:
-    """Global regressors of the baseline model of `load` in `band`: for the cycle-averaged
-    part, the cycle-averaged states and control of its axis (Eqs. 2 and 5); the flapping part
-    is the flight's own Fourier series (Eq. 12, local) and has none."""
-    if band == "flapping":
-        return np.zeros((s.n, 0))
+    """Global regressors of the baseline model of `load` in `band`: the states and control
+    of its axis (Eqs. 2 and 5), cycle-averaged below the split; above it, their parts above the
+    split (what a step input puts there; the flapping series itself, Eq. 12, is local)."""
     a = axis_of(load)
-    return np.stack([_slow(s, x) for x in AXIS_STATES[a] + (AXIS_INPUT[a],)], axis=1)
+    src = s.slow if band == "averaged" else s.fast
+    return np.stack([src.get(x, np.zeros(s.n)) for x in AXIS_STATES[a] + (AXIS_INPUT[a],)],
+                    axis=1)
 
 
 def _flap_coupling(s, load, variant, h, dh):

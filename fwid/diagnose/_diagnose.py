@@ -153,7 +153,10 @@ def diagnose(
             sigma2[ch] = max(sse, 1e-300)
             for j, i in enumerate(test_idx):
                 base_res[j][ch] = engine.residual(i, ch, th)
-    full = lambda res: {ld: res[(ld, "averaged")] + res[(ld, "flapping")] for ld in loads}
+
+    def full(res):
+        return {ld: res[(ld, "averaged")] + res[(ld, "flapping")] for ld in loads}
+
     before = [full(r) for r in base_res]
     rms_before = {ld: _rms(np.concatenate([r[ld] for r in before])) for ld in loads}
 
@@ -162,14 +165,18 @@ def diagnose(
         tests = load_tests(cv, e.name)
         sig_ch = significant_loads(tests, n_tests, alpha, min_gain)
         variant, thetas = engine.fit_effect(fold_idx, e, sigma2)
-        after_res = []
+        after_res, after_band = [], []
         for j, i in enumerate(test_idx):
             res = dict(base_res[j])
             for ch, th in thetas.items():
                 res[ch] = engine.residual(i, ch, th, e, variant)
+            after_band.append(res)
             after_res.append(full(res))
         augmented[e.name] = after_res
         rms_after = {ld: _rms(np.concatenate([r[ld] for r in after_res])) for ld in loads}
+        in_band = {ch[0]: (_rms(np.concatenate([r[ch] for r in base_res])),
+                           _rms(np.concatenate([r[ch] for r in after_band])))
+                   for ch in thetas}
         best_ch = max(tests, key=lambda ch: tests[ch].t)
         affected = [ch[0] for ch in sig_ch] or [best_ch[0]]
         ratio = np.mean([(rms_after[ld] / rms_before[ld]) ** 2 for ld in affected])
@@ -192,6 +199,7 @@ def diagnose(
             "band": e.band,
             "variant": _variant_text(variant),
             "band_shrink_pct": band_drop,
+            "test_rms_in_band": {ld: {"before": b, "after": a} for ld, (b, a) in in_band.items()},
             "evidence": {ch[0]: tests[ch].as_dict for ch in tests},
             "description": e.description,
             "_rank": (significant, score if significant else tests[best_ch].t),

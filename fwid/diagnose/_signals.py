@@ -33,7 +33,7 @@ class Signals:
     """One flight (or one block of a flight) prepared for the diagnosis.
 
     - `slow`: cycle-averaged perturbations (below the 5 Hz split, Section III.B) of every
-      state and input present, by name.
+      state and input present, by name; `fast`: their parts above the split.
     - `loads`: the measured loads split as in Section III.B, `loads[band][load]` with `band`
       one of `BANDS`: `"averaged"` (below the split) and `"flapping"` (the harmonics).
     - `phase`: the flapping phase `int 2 pi f dt` (drives Eq. 12).
@@ -47,7 +47,8 @@ class Signals:
     f_mean: float
     f_spread: float
     slow: dict[str, np.ndarray]
-    loads: dict[str, np.ndarray]
+    fast: dict[str, np.ndarray]
+    loads: dict[str, dict[str, np.ndarray]]
     manoeuvre: np.ndarray
 
     @property
@@ -66,6 +67,7 @@ class Signals:
             f_mean=self.f_mean,
             f_spread=self.f_spread,
             slow={k: v[s] for k, v in self.slow.items()},
+            fast={k: v[s] for k, v in self.fast.items()},
             loads={b: {k: v[s] for k, v in d.items()} for b, d in self.loads.items()},
             manoeuvre=self.manoeuvre[s],
         )
@@ -88,6 +90,7 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
     slow = {c: np.asarray(parts.averaged[c] - flight.trim_value(c))[keep]
             for c in SLOW if c in names}
     slow["f"] = f[keep] - np.mean(f)
+    fast = {c: np.asarray(parts.flapping[c])[keep] for c in SLOW if c in names}
     loads = {
         "averaged": {c: np.asarray(parts.averaged[c])[keep] for c in LOADS if c in names},
         "flapping": {c: np.asarray(parts.flapping[c])[keep] for c in LOADS if c in names},
@@ -102,6 +105,7 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
         f_mean=float(np.mean(f)),
         f_spread=float(np.ptp(f)),
         slow=slow,
+        fast=fast,
         loads=loads,
         manoeuvre=manoeuvre,
     )
