@@ -29,7 +29,7 @@ ALPHA = 0.01
 #: Smallest relative drop of the held-out mean-square error that counts (2 %).
 MIN_GAIN = 0.02
 #: Fewest cross-validation folds; fewer training flights are cut into blocks.
-MIN_FOLDS = 6
+MIN_FOLDS = 8
 
 
 @dataclasses.dataclass
@@ -84,7 +84,11 @@ class Engine:
             else:
                 h, dh = self.series(i, load)
                 extra = effect.columns(s, load, variant, h, dh)
-                self._cache[key] = np.concatenate([self.design(i, channel), extra], axis=1)
+                base = self.design(i, channel)
+                if effect.replaces_input:  # the control is the last base column
+                    self._cache[key] = np.concatenate([base[:, :-1], extra], axis=1)
+                else:
+                    self._cache[key] = np.concatenate([base, extra], axis=1)
         return self._cache[key]
 
     def target(self, i, channel) -> np.ndarray:

@@ -14,8 +14,9 @@ is the generic first term of its physical family.
 - `lon-lat-coupling`: the other axis's states and control drive the load (Eqs. 2 and 5 with
   the cross terms the paper leaves out).
 - `actuator-dynamics`: the deflection that acts is the measured one through a first-order lag
-  or a pure delay; the column `d_eff - d` is added, with the time constant chosen from
-  `LAGS` by the training fit.
+  or a pure delay: `d_eff` replaces `d` in the load's own model (no new coefficient, the
+  control derivative acts on `d_eff`), with the time constant chosen from `LAGS` by the
+  training fit. One free number only, so it cannot soak up unrelated misfit.
 """
 
 from __future__ import annotations
@@ -87,7 +88,7 @@ def lagged(x: np.ndarray, dt: float, kind: str, tau: float) -> np.ndarray:
 def _actuator(s, load, variant, h, dh):
     kind, tau = variant
     d = _slow(s, AXIS_INPUT[axis_of(load)])
-    return (lagged(d, s.dt, kind, tau) - d)[:, None]
+    return lagged(d, s.dt, kind, tau)[:, None]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,13 +96,15 @@ class Effect:
     """One candidate effect: `columns(signals, load, variant, h, dh)` returns the regressors
     it adds to the model of `load` in `band` (`h`, `dh`: the flight's flapping series of that
     load and its phase derivative); `variants` are the discrete choices fitted by trying each
-    (e.g. time constants)."""
+    (e.g. time constants). With `replaces_input`, the single column returned replaces the
+    control column of the baseline instead of being added."""
 
     name: str
     description: str
     band: str
     columns: Callable = dataclasses.field(repr=False)
     variants: tuple = (None,)
+    replaces_input: bool = False
 
 
 CATALOGUE: tuple[Effect, ...] = (
@@ -129,6 +132,7 @@ CATALOGUE: tuple[Effect, ...] = (
         "averaged",
         _actuator,
         tuple(("lag", t) for t in LAGS) + tuple(("delay", t) for t in LAGS),
+        replaces_input=True,
     ),
 )
 

@@ -29,6 +29,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
         + (f"; grows with {st['top']} (x{st['top_spread']:.1f} across its bins)"
            if st["top"] else ""),
     ]
+    if len(d.train) < 8:
+        lines.append(f"  note: only {len(d.train)} training flights, cut into blocks for "
+                     "cross-validation; the test is conservative (8 or more flights are better)")
     if d.verdict == "none":
         lines.append("  VERDICT: none (no candidate effect improves the held-out fit significantly)")
     else:

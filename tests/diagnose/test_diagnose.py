@@ -1,0 +1,125 @@
+"""`fwid.diagnose` on flights with a withheld effect: the verdict, the shrink, the gap map."""
+
+import json
+import random
+
+import numpy as np
+import pytest
+
+import fwid
+from fwid.diagnose import BAND_NAMES, EFFECT_NAMES
+
+from .conftest import resample
+
+
+def _diagnose(train_dir, test_dir, axis="lon", shuffle=None):
+    train = fwid.load_flights(train_dir)
+    test = fwid.load_flights(test_dir)
+    if shuffle is not None:
+        random.Random(shuffle).shuffle(train)
+        random.Random(shuffle + 1).shuffle(test)
+    return fwid.diagnose(train, test, axis=axis)
+
+
+@pytest.mark.parametrize("effect", EFFECT_NAMES)
+def test_names_the_withheld_effect_and_the_error_shrinks(effect_flights, effect):
+    d = _diagnose(*effect_flights(effect, strength=1.0, seed=1))
+    assert d.verdict == effect, [(c["effect"], c["significant"]) for c in d.candidates]
+    top = d.candidates[0]
+    assert top["effect"] == effect and top["significant"]
+    assert top["shrink_pct"] > 0
+    for ld in top["affected"]:
+        assert top["test_rms_after"][ld] < top["test_rms_before"][ld]
+        band = top["test_rms_in_band"][ld]
+        assert band["after"] < 0.9 * band["before"]  # in its own band the gap closes clearly
+    others = [c for c in d.candidates[1:] if c["significant"]]
+    assert len(others) <= 1  # at most one runner-up also helps a little
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_none_on_clean_flights(effect_flights, seed):
+    d = _diagnose(*effect_flights("none", seed=seed))
+    assert d.verdict == "none"
+    assert not any(c["significant"] for c in d.candidates)
+
+
+def test_out_of_catalogue_effect_gets_no_confident_wrong_name(effect_flights):
+    """Unmeasured gusts are not in the catalogue: the answer is none, or a small shrink."""
+    d = _diagnose(*effect_flights("turbulence", strength=1.0, seed=3))
+    if d.verdict != "none":
+        assert d.candidate(d.verdict)["shrink_pct"] < 5.0
+    assert d.verdict == "none"
+
+
+@pytest.mark.parametrize("effect", ["none", "lon-lat-coupling", "actuator-dynamics"])
+def test_lateral_axis(effect_flights, effect):
+    d = _diagnose(*effect_flights(effect, axis="lat", seed=4), axis="lat")
+    assert d.verdict == effect
+
+
+def test_verdict_stable_under_shuffle_resample_and_cut(effect_flights, tmp_path):
+    train, test = effect_flights("actuator-dynamics", seed=5)
+    ref = _diagnose(train, test)
+    assert ref.verdict == "actuator-dynamics"
+    shuffled = _diagnose(train, test, shuffle=7)
+    assert shuffled.verdict == ref.verdict
+    assert [c["effect"] for c in shuffled.candidates] == [c["effect"] for c in ref.candidates]
+    np.testing.assert_allclose(shuffled.candidates[0]["shrink_pct"],
+                               ref.candidates[0]["shrink_pct"], rtol=1e-9)
+    for rate, cut in ((100.0, 0.0), (250.0, 0.0), (200.0, 0.3)):
+        d = _diagnose(resample(train, tmp_path / f"tr{rate}{cut}", rate, cut),
+                      resample(test, tmp_path / f"te{rate}{cut}", rate, cut))
+        assert d.verdict == ref.verdict, (rate, cut)
+
+
+def test_few_training_flights_use_blocks(effect_flights):
+    """Fewer than 8 training flights are cut into blocks: 8 cross-validation folds. Blocks
+    of one flight are not independent and the quiet ones carry nothing, so the test is
+    conservative there: the verdict may fall back to `none`, but never to a wrong name."""
+    for n_train in (4, 2):
+        d = _diagnose(*effect_flights("actuator-dynamics", strength=1.0, seed=6,
+                                      n_train=n_train, n_test=2))
+        assert len(d.folds) == 8 and f"[1/{8 // n_train}]" in d.folds[0]
+        assert d.verdict in ("actuator-dynamics", "none")
+        assert d.candidates[0]["effect"] == "actuator-dynamics"  # still ranked first
+
+
+def test_report_follows_the_contract(effect_flights):
+    d = _diagnose(*effect_flights("flap-coupling", seed=1))
+    rep = json.loads(json.dumps(d.to_json()))
+    assert rep["verdict"] == "flap-coupling"
+    for c in rep["candidates"]:
+        assert {"effect", "significant", "shrink_pct", "test_rms_before",
+                "test_rms_after"} <= set(c)
+        assert c["effect"] in EFFECT_NAMES
+    loc = rep["localisation"]
+    assert {"by_output", "by_band", "by_time", "by_state"} <= set(loc)
+    for ld, bands in loc["by_band"].items():
+        assert set(bands) == set(BAND_NAMES)
+        assert sum(bands.values()) == pytest.approx(100.0)
+    assert sum(v["share_pct"] for v in loc["by_output"].values()) == pytest.approx(100.0)
+    # flapping modulated by the motion: its gap lives in the sidebands of the harmonics
+    for ld in ("X", "Z", "M"):
+        side = sum(loc["by_band"][ld][f"sidebands_{n}"] for n in (1, 2, 3))
+        assert side > loc["by_band"][ld]["averaged"]
+        assert loc["by_time"][ld]["manoeuvre_to_steady"] > 1.0
+
+
+def test_bad_input_names_what_and_where(effect_flights, tmp_path):
+    train, test = effect_flights("none", seed=0)
+    flights = fwid.load_flights(train)
+    with pytest.raises(fwid.InputError, match=r"lon_0\.csv.*'M'"):
+        fwid.diagnose([f.with_columns() for f in flights[:1]] +
+                      [_drop(flights[1], "M")], fwid.load_flights(test))
+    still = [f.with_columns(de=f["de"] * 0 + f.trim_value("de")) for f in flights]
+    with pytest.raises(fwid.ExcitationError, match="excitation"):
+        fwid.diagnose(still, fwid.load_flights(test))
+    with pytest.raises(fwid.InputError, match="axis"):
+        fwid.diagnose(flights, flights, axis="yaw")
+
+
+def _drop(flight, col):
+    import equinox as eqx
+
+    cols = {k: v for k, v in flight.columns.items() if k != col}
+    return eqx.tree_at(lambda f: f.columns, flight, cols)
