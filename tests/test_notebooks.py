@@ -55,3 +55,11 @@ def test_sensitivities_notebook_runs(tmp_path):
     total, iy = (float(x) for x in line.replace("Iy:", ":").split(":")[1:3])
     assert total == pytest.approx(-iy, rel=1e-6, abs=1e-9)
     assert len(images) >= 4  # the three figures of sensitivities and the refits
+
+
+@pytest.mark.slow
+def test_diagnosis_notebook_runs(tmp_path):
+    outputs, text, images = _execute("04_diagnosis.ipynb", tmp_path)
+    assert "VERDICT: actuator-dynamics" in text
+    assert "VERDICT: none" in text
+    assert len(images) >= 2  # the gap map and the residual in time

@@ -139,3 +139,36 @@ def test_entry_point_exit_code_and_message(tmp_path):
                            "--model", "lon"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert "nope.csv" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
+    train, test, out = tmp_path / "train", tmp_path / "test", tmp_path / "out"
+    for folder, seed in ((train, 11), (test, 12)):
+        assert main(["simulate", str(folder), "--flights", "8", "--seed", str(seed),
+                     "--effect", "nonlinear-aero", "--strength", "1.5"]) == 0
+    capsys.readouterr()
+    assert main(["diagnose", "--train", str(train), "--test", str(test), "--out", str(out),
+                 "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "VERDICT: nonlinear-aero" in text
+    rep = json.loads((out / "diagnosis.json").read_text())
+    assert rep["verdict"] == "nonlinear-aero"
+    top = rep["candidates"][0]
+    assert top["effect"] == "nonlinear-aero" and top["significant"] and top["shrink_pct"] > 0
+    assert set(top["test_rms_before"]) == {"X", "Y", "Z", "L", "M", "N"}
+    assert rep["localisation"]["by_output"]
+    assert (out / "gap_map.png").stat().st_size > 10_000
+    # bad input: exit 2, one line, the earlier report untouched
+    before = (out / "diagnosis.json").read_text()
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "vehicle.json").write_text((train / "vehicle.json").read_text())
+    lines = (train / "lon_0.csv").read_text().splitlines()
+    cols = lines[0].split(",")
+    keep = [i for i, c in enumerate(cols) if c != "Z"]
+    (tmp_path / "bad" / "lon_0.csv").write_text(
+        "\n".join(",".join(row.split(",")[i] for i in keep) for row in lines) + "\n")
+    assert main(["diagnose", "--train", str(tmp_path / "bad"), "--test", str(test), "--out",
+                 str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "lon_0.csv" in err[0] and "'Z'" in err[0]
+    assert (out / "diagnosis.json").read_text() == before

@@ -143,3 +143,20 @@ def test_loader_reads_written_flights(lon_dir):
     assert float(fl.trim["theta0"]) == side["trim"]["theta0"]
     assert fl.vehicle is not None and float(fl.vehicle.mass) == DELFLY.mass
     assert fl.first_input == side["first_input"]
+
+
+def test_truth_columns_and_out_of_catalogue_turbulence(tmp_path):
+    import numpy as np
+
+    from fwid.synth import OUT_OF_CATALOGUE, simulate_flight, write_flights
+
+    assert "turbulence" in OUT_OF_CATALOGUE
+    p = write_flights(tmp_path, 1, seed=2, effect="turbulence", truth_columns=True)[0]
+    header = p.read_text().splitlines()[0].split(",")
+    assert {"X_true", "M_true", "N_true"} <= set(header)
+    calm = simulate_flight(seed=5, effect="turbulence", strength=0.0)
+    none = simulate_flight(seed=5)
+    gusty = simulate_flight(seed=5, effect="turbulence", strength=1.0)
+    np.testing.assert_array_equal(calm["q"], none["q"])  # strength 0 is exactly none
+    dq = gusty["meta"]["clean"]["q"] - none["meta"]["clean"]["q"]
+    assert np.std(dq) > 0.02  # gusts move the vehicle by far more than the noise (rad/s)
