@@ -24,6 +24,7 @@ import argparse
 import json
 import multiprocessing as mp
 import platform
+import sys
 import tempfile
 import time
 from collections import Counter
@@ -188,22 +189,22 @@ def main(argv=None):
     md = [
         "# fwid diagnose: withheld-effect benchmark",
         "",
-        f"Machine: {platform.platform()}, {mp.cpu_count()} CPUs; {args.workers} worker(s). "
+        (f"Machine: {platform.platform()}, {mp.cpu_count()} CPUs; {args.workers} worker(s). "
         f"8 training + 8 test flights of 4.5 s at 200 Hz per case, sidecars deleted; "
-        f"seeds {args.seeds}, strengths {args.strengths}, axes {args.axes}. Total {total:.0f} s.",
+        f"seeds {args.seeds}, strengths {args.strengths}, axes {args.axes}. Total {total:.0f} s."),
         "",
-        "Command: `python benchmarks/diagnosis.py " + " ".join(argv or []) + "`",
+        "Command: `python benchmarks/diagnosis.py " + " ".join(sys.argv[1:] if argv is None else argv) + "`",
         "",
         "## Summary",
         "",
     ] + [f"- {k}: {v}" for k, v in summary.items()] + [
         "",
-        "G = (RMS before - RMS after) / (RMS before - RMS of the exact loads), on the test "
+        ("G = (RMS before - RMS after) / (RMS before - RMS of the exact loads), on the test "
         "flights, in the band of the verdict's effect, per load the effect materially changes "
-        "(its own RMS >= half the true model's error), for correct verdicts.",
+        "(its own RMS >= half the true model's error), for correct verdicts."),
         "",
-        "## Confusion matrices (rows: injected effect; `turbulence` is outside the catalogue, "
-        "its correct answer is none)",
+        ("## Confusion matrices (rows: injected effect; `turbulence` is outside the catalogue, "
+        "its correct answer is none)"),
         _summarise(results, args.strengths, args.axes),
     ]
     (out / "diagnosis.md").write_text("\n".join(md) + "\n")

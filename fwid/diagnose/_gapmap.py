@@ -51,7 +51,7 @@ def input_events(s: Signals, axis: str) -> np.ndarray:
         return np.zeros(s.n, bool)
     rate = np.abs(np.gradient(d, s.dt))
     moving = rate > max(rate.max() / 3.0, 1e-12)
-    window = int(round(AFTER_INPUT / s.dt))
+    window = round(AFTER_INPUT / s.dt)
     out = np.zeros(s.n, bool)
     for i in np.flatnonzero(moving):
         out[i : i + window] = True

@@ -55,7 +55,7 @@ class Signals:
     def n(self) -> int:
         return len(self.t)
 
-    def block(self, i: int, count: int) -> "Signals":
+    def block(self, i: int, count: int) -> Signals:
         """Block `i` of `count` contiguous blocks (a cross-validation unit)."""
         edges = np.linspace(0, self.n, count + 1).astype(int)
         s = slice(edges[i], edges[i + 1])
@@ -84,7 +84,7 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
     dt = flight.dt
     names = [c for c in SLOW + LOADS if c in flight and c != "f"]
     parts = decompose({c: flight[c] for c in names}, dt, split_cutoff=cutoff)
-    keep = slice(int(round(EDGE / dt)), flight.n - int(round(EDGE / dt)))
+    keep = slice(round(EDGE / dt), flight.n - round(EDGE / dt))
     f = np.asarray(flight["f"], dtype=float)
     phase = np.asarray(flapping_phase(f, dt))
     slow = {c: np.asarray(parts.averaged[c] - flight.trim_value(c))[keep]

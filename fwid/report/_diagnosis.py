@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..diagnose import BAND_NAMES, Diagnosis
+from ..diagnose._signals import AXIS_LOADS
 
 _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
 
@@ -15,14 +16,17 @@ _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
-    worst = max(loc["by_output"], key=lambda ld: loc["by_output"][ld]["unexplained_pct"])
+    # the loads to talk about: those the verdict affects, else the manoeuvre axis's own
+    focus = (d.candidate(d.verdict)["affected"] if d.verdict != "none"
+             else [ld for ld in loc["by_output"] if ld in AXIS_LOADS[d.axis]])
+    worst = max(focus or loc["by_output"], key=lambda ld: loc["by_output"][ld]["unexplained_pct"])
     bands = loc["by_band"][worst]
     top_band = max(bands, key=bands.get)
     tm = loc["by_time"][worst]
     st = loc["by_state"][worst]
     lines = [
-        f"fwid diagnose ({d.axis}): {len(d.train)} training, {len(d.test)} test flights, "
-        f"{len(d.folds)} cross-validation folds",
+        (f"fwid diagnose ({d.axis}): {len(d.train)} training, {len(d.test)} test flights, "
+        f"{len(d.folds)} cross-validation folds"),
         f"  gap: largest in {worst} ({loc['by_output'][worst]['unexplained_pct']:.1f} % "
         f"unexplained), {bands[top_band]:.0f} % of it in band {top_band}; manoeuvre/steady RMS "
         f"{tm['manoeuvre_to_steady']:.2f}"
@@ -78,7 +82,7 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
 
     x = np.arange(len(loads))
     keys = (("steady_rms", "steady"), ("manoeuvre_rms", "manoeuvre"),
-            ("after_input_rms", f"<1 s after input"))
+            ("after_input_rms", "<1 s after input"))
     for k, (key, label) in enumerate(keys):
         rel = [loc["by_time"][ld][key] / loc["by_output"][ld]["rms"] for ld in loads]
         ax[0, 1].bar(x + (k - 1) * 0.27, rel, 0.27, label=label)
