@@ -189,9 +189,10 @@ def main(argv=None):
         "",
     ] + [f"- {k}: {v}" for k, v in summary.items()] + [
         "",
-        ("G = (RMS before - RMS after) / (RMS before - RMS of the exact loads), on the test "
-        "flights, in the band of the verdict's effect, per load the effect materially changes "
-        "(its own RMS >= half the true model's error), for correct verdicts."),
+        ("G = (RMS before - RMS after) / (RMS before - RMS of the true model), on the test "
+         "flights, in the band of the verdict's effect, per load whose baseline error exceeds "
+         "the true model's by 10 %; the true model's error is the baseline's on effect-free "
+         "twins of the same flights (same seeds and noise). For correct verdicts."),
         "",
         ("## Confusion matrices (rows: injected effect; `turbulence` is outside the catalogue, "
         "its correct answer is none)"),
