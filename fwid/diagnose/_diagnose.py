@@ -21,7 +21,7 @@ from ._attribution import (
     units,
 )
 from ._catalogue import CATALOGUE, Effect
-from ._gapmap import BAND_NAMES, band_energy, gap_map
+from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, signals
 
 
@@ -68,10 +68,6 @@ def _variant_text(v) -> str | None:
         return None
     kind, tau = v
     return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
-
-
-def _rms(x) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
 
 
 def _check_excitation(sigs, axis: str) -> None:
@@ -158,7 +154,7 @@ def diagnose(
         return {ld: res[(ld, "averaged")] + res[(ld, "flapping")] for ld in loads}
 
     before = [full(r) for r in base_res]
-    rms_before = {ld: _rms(np.concatenate([r[ld] for r in before])) for ld in loads}
+    rms_before = {ld: rms(np.concatenate([r[ld] for r in before])) for ld in loads}
 
     candidates, augmented = [], {}
     for e in catalogue:
@@ -173,20 +169,18 @@ def diagnose(
             after_band.append(res)
             after_res.append(full(res))
         augmented[e.name] = after_res
-        rms_after = {ld: _rms(np.concatenate([r[ld] for r in after_res])) for ld in loads}
-        in_band = {ch[0]: (_rms(np.concatenate([r[ch] for r in base_res])),
-                           _rms(np.concatenate([r[ch] for r in after_band])))
+        rms_after = {ld: rms(np.concatenate([r[ld] for r in after_res])) for ld in loads}
+        in_band = {ch[0]: (rms(np.concatenate([r[ch] for r in base_res])),
+                           rms(np.concatenate([r[ch] for r in after_band])))
                    for ch in thetas}
         best_ch = max(tests, key=lambda ch: tests[ch].t)
         affected = [ch[0] for ch in sig_ch] or [best_ch[0]]
         ratio = np.mean([(rms_after[ld] / rms_before[ld]) ** 2 for ld in affected])
         shrink = 100.0 * (1.0 - math.sqrt(ratio))
-        band_drop = {}
-        for b_i, b in enumerate(BAND_NAMES):
-            eb = sum(band_energy(r[ld], s)[b_i] for r, s in zip(before, te_sig) for ld in affected)
-            ea = sum(band_energy(r[ld], s)[b_i]
-                     for r, s in zip(after_res, te_sig) for ld in affected)
-            band_drop[b] = 100.0 * (1.0 - ea / eb) if eb > 0 else 0.0
+        eb = sum(band_energy(r[ld], s) for r, s in zip(before, te_sig) for ld in affected)
+        ea = sum(band_energy(r[ld], s) for r, s in zip(after_res, te_sig) for ld in affected)
+        band_drop = {b: 100.0 * (1.0 - a / e) if e > 0 else 0.0
+                     for b, e, a in zip(BAND_NAMES, eb, ea)}
         significant = bool(sig_ch) and shrink > 0.0
         score = sum(tests[ch].gain for ch in sig_ch)
         candidates.append({

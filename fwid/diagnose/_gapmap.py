@@ -62,7 +62,8 @@ def _pct(a, b):
     return float(100.0 * a / b) if b > 0 else 0.0
 
 
-def _rms(x):
+def rms(x) -> float:
+    """Root mean square (NaN for no samples)."""
     return float(np.sqrt(np.mean(np.square(x)))) if len(x) else float("nan")
 
 
@@ -94,7 +95,7 @@ def gap_map(
         var_r = np.mean(np.concatenate([x - x.mean() for x in r]) ** 2)
         var_m = np.mean(np.concatenate([x - x.mean() for x in m]) ** 2)
         unexplained[ld] = var_r / var_m if var_m > 0 else 0.0
-        out["by_output"][ld] = {"rms": _rms(np.concatenate(r)),
+        out["by_output"][ld] = {"rms": rms(np.concatenate(r)),
                                 "unexplained_pct": 100.0 * unexplained[ld]}
         energy = sum(band_energy(x, s) * len(x) for x, s in zip(r, sigs))
         out["by_band"][ld] = {b: _pct(e, energy.sum()) for b, e in zip(BAND_NAMES, energy)}
@@ -118,15 +119,15 @@ def _by_time(sigs, r, axis) -> dict:
         for c in np.unique(k):
             sel = k == c
             if sel.sum() >= 3:
-                cycles.append((_rms(x[sel]), s.name, float(s.t[sel][0])))
+                cycles.append((rms(x[sel]), s.name, float(s.t[sel][0])))
     vals = np.array([c[0] for c in cycles])
     worst = cycles[int(np.argmax(vals))]
     return {
-        "steady_rms": _rms(steady),
-        "manoeuvre_rms": _rms(man),
-        "manoeuvre_to_steady": _rms(man) / _rms(steady) if len(steady) else float("nan"),
-        "after_input_rms": _rms(after),
-        "elsewhere_rms": _rms(rest),
+        "steady_rms": rms(steady),
+        "manoeuvre_rms": rms(man),
+        "manoeuvre_to_steady": rms(man) / rms(steady) if len(steady) else float("nan"),
+        "after_input_rms": rms(after),
+        "elsewhere_rms": rms(rest),
         "per_cycle": {"median": float(np.median(vals)), "p90": float(np.percentile(vals, 90)),
                       "max": worst[0], "max_flight": worst[1], "max_t": worst[2]},
     }

@@ -59,8 +59,9 @@ class Projector:
 
 def solve(
     designs: Sequence[np.ndarray], targets: Sequence[np.ndarray], projectors: Sequence[Projector]
-) -> np.ndarray:
-    """Global coefficients `theta` minimising `sum_k |P_k (y_k - G_k theta)|^2`.
+) -> tuple[np.ndarray, float]:
+    """Global coefficients `theta` minimising `sum_k |P_k (y_k - G_k theta)|^2`, and that
+    minimum (the training error, local terms re-estimated).
 
     Columns are scaled to unit norm first and rank deficiency (a column that never moves,
     e.g. the rudder in an elevator manoeuvre) is handled by the pseudo-inverse: such a
@@ -68,15 +69,14 @@ def solve(
     """
     a = np.concatenate([p(g) for p, g in zip(projectors, designs)], axis=0)
     b = np.concatenate([p(y) for p, y in zip(projectors, targets)], axis=0)
-    if a.shape[1] == 0:
-        return np.zeros(0)
-    norms = np.linalg.norm(a, axis=0)
-    live = norms > 1e-12 * max(float(norms.max()), 1e-300)
     theta = np.zeros(a.shape[1])
-    if np.any(live):
-        sol = np.linalg.lstsq(a[:, live] / norms[live], b, rcond=1e-10)[0]
-        theta[live] = sol / norms[live]
-    return theta
+    if a.shape[1]:
+        norms = np.linalg.norm(a, axis=0)
+        live = norms > 1e-12 * max(float(norms.max()), 1e-300)
+        if np.any(live):
+            sol = np.linalg.lstsq(a[:, live] / norms[live], b, rcond=1e-10)[0]
+            theta[live] = sol / norms[live]
+    return theta, float(np.sum((b - a @ theta) ** 2))
 
 
 def residual(design: np.ndarray, target: np.ndarray, projector: Projector, theta) -> np.ndarray:

@@ -112,16 +112,11 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
 
 
 def check_axis(flights: Sequence[Flight], axis: str, role: str) -> None:
-    """Every flight has what the diagnosis of `axis` needs; else an `InputError` naming it."""
+    """Every flight has what the diagnosis of `axis` needs; else an `InputError` naming the
+    flight and the missing columns (`Flight.require`)."""
     if axis not in REQUIRED:
         raise InputError(f"axis must be 'lon' or 'lat', got {axis!r}")
     if not flights:
         raise InputError(f"no {role} flights given")
     for fl in flights:
-        missing = [c for c in REQUIRED[axis] if c not in fl]
-        if missing:
-            raise InputError(
-                f"{fl.name}: missing column{'s' if len(missing) > 1 else ''} "
-                f"{', '.join(repr(c) for c in missing)} needed to diagnose the {axis} axis "
-                f"({role} flight)"
-            )
+        fl.require(REQUIRED[axis])

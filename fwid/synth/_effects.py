@@ -38,6 +38,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from scipy.signal import lfilter
 
 #: Effect names (CONTRACTS section 4).
 EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics")
@@ -135,10 +136,8 @@ class Effect:
         h = t[1] - t[0]
         a = np.exp(-2 * np.pi * GUST_BANDWIDTH * h)
         w = rng.standard_normal((len(t), 3)) * np.sqrt(1 - a * a)
-        g = np.zeros_like(w)
-        g[0] = rng.standard_normal(3)
-        for k in range(1, len(t)):  # first-order Gauss-Markov process, stationary from t = 0
-            g[k] = a * g[k - 1] + w[k]
+        w[0] = rng.standard_normal(3)  # g_0: stationary from t = 0
+        g = lfilter((1.0,), (1.0, -a), w, axis=0)  # first-order Gauss-Markov: g_k = a g_k-1 + w_k
         return g * self.coefficients()["gust_rms"]
 
     def truth(self) -> dict:
