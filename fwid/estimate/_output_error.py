@@ -365,6 +365,9 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
 
 @eqx.filter_jit
 def _fit_each_batched(model, theta0s, batches, **kw):
+    if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
+        out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
+        return jax.tree.map(lambda a: a[None], out)
     return jax.vmap(lambda th, b: _fit_batch(model, th, b, **kw))(theta0s, batches)
 
 
