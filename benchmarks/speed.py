@@ -57,6 +57,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))  # the fwid of this checkout, not another installed one
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
@@ -254,11 +255,16 @@ class Bench:
             rtol=sig["rtol"].default, cost_rtol=sig["cost_rtol"].default,
         )
         self._fwid_batched = None
+        self._start_models = {}
         self._ref = make_fit(lon_f_jax)
 
     # -- fwid.fit, one flight per call -----------------------------------------------------
     def _start_model(self, i):
-        return self.model.with_params(dict(zip(NAMES, map(float, self.starts[i]))))
+        # built once per flight, as the reference's start arrays are
+        if i not in self._start_models:
+            self._start_models[i] = self.model.with_params(
+                dict(zip(NAMES, map(float, self.starts[i]))))
+        return self._start_models[i]
 
     def fwid_fit(self, i):
         r = fwid.fit(self.model, self.exps[i], start=self._start_model(i))
@@ -271,7 +277,11 @@ class Bench:
         """The XLA buffers of the program fwid.fit runs (its filter_jit, already compiled)."""
         try:
             sm, a = self.fit_batch_args(i)
-            lowered = _oe._fit_batch_jit.lower(sm, *a, n_local_batch=0, **self.fit_defaults)
+            if hasattr(_oe, "_fit_one_jit"):  # fwid.fit's program for a single flight
+                lowered = _oe._fit_one_jit.lower(sm, a[0], self.exps[i], n_local_batch=0,
+                                                 **self.fit_defaults)
+            else:
+                lowered = _oe._fit_batch_jit.lower(sm, *a, n_local_batch=0, **self.fit_defaults)
             return _xla_memory(lowered.lowered.compile())
         except Exception:
             return None
@@ -395,6 +405,8 @@ def run(args):
                 F["t"], F["u"][i], F["z"][i], F["x0"][i], F["consts_list"][i])]).theta())
             for i in range(n_max)])
     B = Bench(F, starts, args.repeats)
+    print(f"fwid from {Path(fwid.__file__).parent}; JAX {jax.__version__} on "
+          f"{jax.default_backend()}: {', '.join(str(d) for d in jax.devices())}", flush=True)
     rows = []
     fwid_est = {}  # n -> (theta (n,16), std (n,16)) from the fwid row of that size
     log = functools.partial(print, flush=True)
@@ -543,6 +555,7 @@ def run(args):
         float64=dict(enabled=bool(jax.config.jax_enable_x64), enabled_by_importing_fwid=X64_BY_FWID,
                      FWID_NO_X64=os.environ.get("FWID_NO_X64")),
         compilation_cache_dir=jax.config.jax_compilation_cache_dir,
+        fwid_path=str(Path(fwid.__file__).parent),
         XLA_FLAGS=os.environ.get("XLA_FLAGS"),
         versions={m: _version(m) for m in ("diffrax", "optimistix", "equinox", "lineax",
                                             "numpy", "scipy", "fwid")},
@@ -618,16 +631,20 @@ def run_profile(B, args, fit_warm_s):
     def sim_scan(th):
         return rk4_scan(lon_f_jax, th, x00, u0, DT, c0)
 
+    parts = [("simulate, diffrax (fwid.simulate)", sim_diffrax),
+             ("simulate, lax.scan RK4", sim_scan),
+             ("jacfwd(simulate), diffrax ForwardMode", jax.jacfwd(sim_diffrax)),
+             ("jacfwd(simulate), lax.scan RK4", jax.jacfwd(sim_scan))]
+    if hasattr(_oe, "simulate_sensitivities"):  # what fwid's estimator runs per GN step
+        parts.insert(3, ("outputs + sensitivities, diffrax (one solve)",
+                         lambda th: _oe.simulate_sensitivities(sm, exp, sm.merge, th)))
     micro = {}
-    for name, fn in [("simulate, diffrax (fwid.simulate)", sim_diffrax),
-                     ("simulate, lax.scan RK4", sim_scan),
-                     ("jacfwd(simulate), diffrax ForwardMode", jax.jacfwd(sim_diffrax)),
-                     ("jacfwd(simulate), lax.scan RK4", jax.jacfwd(sim_scan))]:
+    for name, fn in parts:
         compiled, tl, tc = _aot(fn, theta0)
         med, mn = _times(compiled, theta0)
         micro[name] = dict(run_ms=1e3 * med, run_min_ms=1e3 * mn, trace_lower_s=tl,
                            compile_s=tc)
-        print(f"  {name:<40} {1e3 * med:8.3f} ms (min {1e3 * mn:.3f})  trace+lower {tl:5.2f} s  "
+        print(f"  {name:<44} {1e3 * med:8.3f} ms (min {1e3 * mn:.3f})  trace+lower {tl:5.2f} s  "
               f"compile {tc:5.2f} s", flush=True)
     d = np.max(np.abs(np.asarray(sim_diffrax(theta0)) - np.asarray(sim_scan(theta0))))
     micro["max_abs_diff_diffrax_vs_scan"] = float(d)
@@ -645,7 +662,7 @@ def run_profile(B, args, fit_warm_s):
     for f in calls.values():  # compiled already unless --quick skipped a size
         f()
     times = {k: [] for k in calls}
-    for _ in range(5):
+    for _ in range(15):
         for k, f in calls.items():
             t0 = time.perf_counter()
             f()
@@ -680,35 +697,18 @@ def run_profile(B, args, fit_warm_s):
     prof["reference"] = dict(iterations=int(ro["iters"]), halvings=int(ro["halvings"]),
                              ms_per_iteration=1e3 * il[names[1]]["min_s"] / int(ro["iters"]))
 
-    # Steps per relaxation pass, recorded from inside fwid's own while loop: a stand-in for
-    # the `optimistix` module fwid's estimator uses, whose least_squares reports each solve.
-    record = []
-
-    class _OptxRecorder:
-        def __getattr__(self, name):
-            return getattr(optx, name)
-
-        @staticmethod
-        def least_squares(*a, **k):
-            sol = optx.least_squares(*a, **k)
-            acc = getattr(sol.state, "num_accepted_steps", sol.stats["num_steps"])
-            jax.debug.callback(lambda n, m: record.append((int(n), int(m))),
-                               sol.stats["num_steps"], acc)
-            return sol
-
     kw = B.fit_defaults
 
     def build(label, **over):
         fn = functools.partial(_oe._fit_batch, sm, n_local_batch=0, **{**kw, **over})
         compiled, tl, tc = _aot(fn, *fb_args)
-        record.clear()
         out = _block(compiled(*fb_args))
         th = out["theta"] if "theta" in out else out["s"] * np.asarray(fb_args[1])
         r = dict(trace_lower_s=tl, compile_s=tc, passes=int(out["passes"]),
-                 steps=int(out["steps"]), steps_accepted_per_pass=list(record),
+                 steps=int(out["steps"]),
                  max_rel_diff_vs_fwid_fit=float(np.max(np.abs(th / B.fwid_alone[0][0] - 1))))
-        print(f"  what-if {label:<34} trace+lower {tl:5.2f} s compile {tc:5.2f} s  steps "
-              f"{r['steps']:4d} (per pass/accepted {r['steps_accepted_per_pass']})  "
+        print(f"  what-if {label:<40} trace+lower {tl:5.2f} s compile {tc:5.2f} s  steps "
+              f"{r['steps']:4d} (R relaxations {r['passes']})  "
               f"drel {r['max_rel_diff_vs_fwid_fit']:.1e}", flush=True)
         return compiled, r
 
@@ -718,23 +718,30 @@ def run_profile(B, args, fit_warm_s):
         xs = rk4_scan(model.f, params, x0, exp.u, exp.t[1] - exp.t[0], exp.consts)
         return xs, xs
 
+    def scan_sensitivities(model, exp, params_of, theta):
+        def ys(th):
+            return rk4_scan(model.f, params_of(th), exp.x0, exp.u, exp.t[1] - exp.t[0],
+                            exp.consts)
+        return ys(theta), jax.jacfwd(ys)(theta)
+
     variants = {}
-    orig_optx, orig_sim = _oe.optx, _oe.simulate
+    orig_sim = _oe.simulate
+    orig_sens = getattr(_oe, "simulate_sensitivities", None)
     try:  # the patches matter while tracing only; the compiled programs keep what they saw
-        _oe.optx = _OptxRecorder()
         variants["as is"] = build("as is")
-        variants["max_steps 3 per pass (R relaxed every <=3 GN steps)"] = build(
-            "max_steps=3 per pass", max_steps=3, max_passes=40)
         _oe.simulate = scan_simulate
-        variants["lax.scan RK4 instead of diffrax"] = build("lax.scan RK4 instead of diffrax")
-        variants["lax.scan RK4 + max_steps 3 per pass"] = build(
-            "scan RK4 + max_steps=3 per pass", max_steps=3, max_passes=40)
+        if orig_sens is not None:
+            _oe.simulate_sensitivities = scan_sensitivities
+        variants["lax.scan RK4 (jacfwd) instead of diffrax"] = build(
+            "lax.scan RK4 (jacfwd) instead of diffrax")
     finally:
-        _oe.optx, _oe.simulate = orig_optx, orig_sim
+        _oe.simulate = orig_sim
+        if orig_sens is not None:
+            _oe.simulate_sensitivities = orig_sens
     # timed round-robin, with the hand-written reference as the yardstick
     wt = {k: [] for k in variants}
     wt["JAX reference (jit)"] = []
-    for _ in range(5):
+    for _ in range(15):
         for k, (compiled, _) in variants.items():
             t0 = time.perf_counter()
             _block(compiled(*fb_args))
@@ -750,15 +757,15 @@ def run_profile(B, args, fit_warm_s):
                  vs_reference_min=min(wt[k]) / ref_min)
         wi[k] = r
         print(f"  what-if {k:<52} warm {r['warm_s']:.3f} s (min {r['warm_min_s']:.3f}) = "
-              f"{r['vs_reference_median']:.0f}x / {r['vs_reference_min']:.0f}x the reference "
+              f"{r['vs_reference_median']:.2f}x / {r['vs_reference_min']:.2f}x the reference "
               f"(median / min)", flush=True)
     wi["JAX reference (jit)"] = dict(warm_s=ref_med, warm_min_s=ref_min,
                                      all_s=wt["JAX reference (jit)"])
     prof["what_if"] = wi
     prof["note"] = ("what-ifs compile fwid's own _fit_batch (as fwid.fit calls it for one "
                     "flight) with names in fwid.estimate._output_error patched in this process "
-                    "only (simulate -> a lax.scan RK4; optimistix -> a recorder of steps per "
-                    "pass); fwid's files are unchanged")
+                    "only (simulate / simulate_sensitivities -> a lax.scan RK4 with jacfwd); "
+                    "fwid's files are unchanged")
     return prof
 
 
@@ -815,7 +822,7 @@ def markdown(res):
         if r.get("fwid_info") and isinstance(r["fwid_info"], dict):
             fi = r["fwid_info"]
             if "steps" in fi and isinstance(fi["steps"], int):
-                note.append(f"{fi['passes']} passes, {fi['steps']} GN steps")
+                note.append(f"{fi['steps']} GN steps ({fi['passes']} R relaxations)")
             elif "steps" in fi:
                 note.append(f"GN steps {min(fi['steps'])}-{max(fi['steps'])}")
         if r.get("ref_info"):
@@ -839,9 +846,10 @@ def markdown(res):
     f1, j1 = rw.get(("fwid.fit", 1)), rw.get(("JAX reference (jit)", 1))
     if f1 and j1:
         lines += ["", f"Issue 4 targets: fwid.fit warm / hand-written JAX warm = "
-                  f"{f1['warm_s'] / j1['warm_s']:.1f}x median, "
-                  f"{f1['warm_min_s'] / j1['warm_min_s']:.1f}x min (target <= 2x); fwid.fit "
-                  f"compile {f1['compile_s']:.1f} s (target < 30 s)."]
+                  f"{f1['warm_s'] / j1['warm_s']:.2f}x median, "
+                  f"{f1['warm_min_s'] / j1['warm_min_s']:.2f}x min (target <= 2x); fwid.fit "
+                  f"warm speed-up over scipy {f1['speedup_vs_scipy']:.0f}x (target >= 50x); "
+                  f"fwid.fit compile {f1['compile_s']:.1f} s (target < 30 s)."]
     lines += ["", "Batch scaling, warm time for N flights / warm time for 1 flight (fwid: the "
               "batched call over fwid.fit on one flight):", ""]
     by = {(r["method"], r["n_flights"]): r["warm_s"] for r in res["rows"]}
@@ -864,7 +872,7 @@ def markdown(res):
                 lines.append(f"| {k} | {v['run_ms']:.3f} ({v['run_min_ms']:.3f}) | "
                              f"{v['trace_lower_s']:.2f} | {v['compile_s']:.2f} |")
         il = prof["interleaved"]
-        lines += ["", "Interleaved timings (5 rounds, round-robin, so all see the same load):", "",
+        lines += ["", "Interleaved timings (15 rounds, round-robin, so all see the same load):", "",
                   "| call | median [s] | min [s] |", "|---|---:|---:|"]
         for k, v in il.items():
             if k != "ratios":
@@ -873,22 +881,22 @@ def markdown(res):
                          for k, v in il["ratios"].items()]
         ff = prof["fwid_fit"]
         rf = prof["reference"]
-        lines += ["", f"fwid.fit on flight 0: {ff['passes']} relaxation passes, {ff['steps']} "
+        lines += ["", f"fwid.fit on flight 0: {ff['passes']} R relaxations, {ff['steps']} "
                   f"Gauss-Newton steps, {ff['ms_per_gauss_newton_step']:.1f} ms per step (from "
                   f"the minimum time). JAX reference: {rf['iterations']} iterations "
                   f"({rf['halvings']} halvings), {rf['ms_per_iteration']:.1f} ms per iteration.",
                   "",
                   "What-ifs (" + prof["note"] + "):", "",
                   "| variant | warm median (min) [s] | x reference (median / min) | "
-                  "trace+lower [s] | compile [s] | GN steps | steps/accepted per pass | "
+                  "trace+lower [s] | compile [s] | GN steps | R relaxations | "
                   "rel diff vs fwid.fit |", "|---|---:|---:|---:|---:|---:|---|---:|"]
         for k, v in prof["what_if"].items():
             if "steps" not in v:
                 lines.append(f"| {k} | {v['warm_s']:.4f} ({v['warm_min_s']:.4f}) | 1 | | | | | |")
                 continue
-            pp = ", ".join(f"{n}/{m}" for n, m in v["steps_accepted_per_pass"])
+            pp = v.get("passes", "")
             lines.append(f"| {k} | {v['warm_s']:.3f} ({v['warm_min_s']:.3f}) | "
-                         f"{v['vs_reference_median']:.0f} / {v['vs_reference_min']:.0f} | "
+                         f"{v['vs_reference_median']:.2f} / {v['vs_reference_min']:.2f} | "
                          f"{v['trace_lower_s']:.2f} | {v['compile_s']:.2f} | {v['steps']} | {pp} | "
                          f"{v['max_rel_diff_vs_fwid_fit']:.1e} |")
     return "\n".join(lines) + "\n"

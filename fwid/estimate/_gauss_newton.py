@@ -3,9 +3,11 @@
 from collections.abc import Callable
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
+import lineax as lx
 import optimistix as optx
-from jaxtyping import PyTree, Scalar
+from jaxtyping import Array, PyTree, Scalar
 
 
 class _ArmijoWithProgress(optx.AbstractSearch):
@@ -57,7 +59,6 @@ class DampedGaussNewton(optx.AbstractGaussNewton):
         self.descent = optx.NewtonDescent()
         self.search = _ArmijoWithProgress(optx.BacktrackingArmijo(decrease_factor=0.5, slope=1e-4))
         self.verbose = lambda **kw: None
-        self.loss_rtol = loss_rtol
         self.stall_steps = stall_steps
 
     def terminate(self, fn, y, args, options, state, tags):
@@ -68,3 +69,218 @@ class DampedGaussNewton(optx.AbstractGaussNewton):
         return done | stalled | settled, result
 
 
+
+
+# --------------------------------------------------------------------------------------------
+# Gauss-Newton on the output-error likelihood with R relaxed at every step
+# --------------------------------------------------------------------------------------------
+def noise_covariance(v, N, diagonal: bool, floor):
+    """Eq. (11): `R = 1/N sum_k v_k v_k^T` (or its diagonal) plus a tiny floor (invertible)."""
+    vv = v.reshape(-1, v.shape[-1])
+    R = vv.T @ vv / N
+    if diagonal:
+        R = jnp.diag(jnp.diag(R))
+    return R + jnp.diag(floor)
+
+
+def ml_cost(R, N, ny):
+    """Eq. (10) with R from Eq. (11): `N ny / 2 + N/2 ln det R + N ny / 2 ln 2 pi`."""
+    _, logdet = jnp.linalg.slogdet(R)
+    return 0.5 * N * ny + 0.5 * N * logdet + 0.5 * N * ny * jnp.log(2 * jnp.pi)
+
+
+class NoiseModel(eqx.Module):
+    """The measurement-noise side of the output-error likelihood: R of Eq. (11) from the
+    residuals `v` (`(..., ny)`, padded samples zero) and the cost of Eq. (10) at that R."""
+
+    N: Array  # number of real samples
+    floor: Array  # (ny,) added to R's diagonal so that it stays invertible
+    diagonal: bool = eqx.field(static=True)
+
+    def R(self, v):
+        return noise_covariance(v, self.N, self.diagonal, self.floor)
+
+    def cost(self, v):
+        R = self.R(v)
+        c = ml_cost(R, self.N, v.shape[-1])
+        ok = jnp.isfinite(c) & jnp.all(jnp.isfinite(v))
+        return jnp.where(ok, c, jnp.inf)
+
+    def gradient_terms(self, v, J):
+        """`(H, g)`: `sum_k J_k^T R^-1 J_k` and `sum_k J_k^T R^-1 v_k`, R at `v`. `J` is the
+        residual Jacobian `(..., ny, p)`. `g` is the exact gradient of Eq. (10) with R from
+        Eq. (11) (the `dR` terms cancel), `H` its Gauss-Newton Hessian."""
+        ny = v.shape[-1]
+        vv = v.reshape(-1, ny)
+        JJ = J.reshape(vv.shape[0], ny, J.shape[-1])
+        Rinv = jnp.linalg.inv(self.R(vv))
+        # Contract J where it lies (whitening a transposed copy first is slower on XLA:CPU).
+        H = jnp.einsum("kip,ij,kjq->pq", JJ, Rinv, JJ)
+        g = jnp.einsum("kip,ij,kj->p", JJ, Rinv, vv)
+        return H, g
+
+
+def jacobian_once(
+    residuals_and_jacobian: Callable[[Array], tuple[Array, Array]],
+) -> Callable[[Array], Array]:
+    """The residual function, with a forward-mode derivative that is the Jacobian computed
+    once by `residuals_and_jacobian(theta) -> (r, dr/dtheta)` (shape `r.shape + (p,)`).
+
+    `optimistix` linearises the residual function and then applies the linearisation to
+    every basis vector (the Newton solve), and once more to the step (the line search). For
+    a simulation inside a loop each of those re-runs the loop, primal included; here the
+    linear map is the product with the precomputed Jacobian. Only the derivative in `theta`
+    is defined (the function's closure is treated as constant)."""
+
+    @jax.custom_jvp
+    def fn(theta):
+        return residuals_and_jacobian(theta)[0]
+
+    @fn.defjvp
+    def _jvp(primals, tangents):
+        (theta,), (dtheta,) = primals, tangents
+        r, J = residuals_and_jacobian(theta)
+        return r, jnp.tensordot(J, dtheta, axes=1)
+
+    return fn
+
+
+class _RelaxedState(eqx.Module):
+    step_size: Array
+    cost: Array  # Eq. (10) at the last accepted point
+    cost_prev: Array  # ... and at the one before it
+    history: Array  # the cost after each accepted step
+    accepted: Array  # accepted steps (the first evaluation, at the start, not counted)
+
+
+class _RelaxedStepHalving(optx.AbstractSearch):
+    """Step halving on the likelihood itself (Eq. 10 with R from Eq. 11 at the trial point):
+    a step is accepted when it lowers the cost by at least `slope` times the first-order
+    prediction (Armijo), otherwise halved. A step whose predicted decrease is below the
+    cost's round-off (`roundoff (1 + |cost|)`) is accepted unless the cost rises by more than
+    that. Keeps the cost history of the accepted points."""
+
+    noise: NoiseModel
+    history_length: int = eqx.field(static=True)
+    slope: float = 1e-4
+    roundoff: float = 1e3 * float(jnp.finfo(jnp.float64).eps)
+
+    def init(self, y, f_info_struct):
+        del f_info_struct
+        inf = jnp.array(jnp.inf, dtype=y.dtype)
+        return _RelaxedState(step_size=jnp.array(1.0, dtype=y.dtype), cost=inf, cost_prev=inf,
+                             history=jnp.full(self.history_length, jnp.nan, dtype=y.dtype),
+                             accepted=jnp.array(0))
+
+    def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
+        c_eval = self.noise.cost(f_eval_info.residual)
+        v = f_info.residual
+        Rinv = jnp.linalg.inv(self.noise.R(v))
+        dv = f_info.jac.mv(y_eval - y)  # the residuals' first-order change
+        predicted = jnp.einsum("...i,ij,...j->", v, Rinv, dv)  # gradient . step
+        armijo = (c_eval - state.cost <= self.slope * predicted) & (predicted <= 0)
+        # Near the optimum the decrease a step promises falls below the cost's round-off,
+        # where comparing costs decides nothing: then take the step unless the cost rises
+        # by more than its round-off.
+        noise = self.roundoff * (1.0 + jnp.abs(state.cost))
+        negligible = (-predicted <= noise) & (c_eval - state.cost <= noise)
+        accept = first_step | ((armijo | negligible) & jnp.isfinite(c_eval))
+        counted = accept & ~first_step
+        history = jnp.where(
+            counted, state.history.at[state.accepted].set(c_eval, mode="drop"), state.history)
+        new = _RelaxedState(
+            step_size=jnp.where(accept, 1.0, 0.5 * state.step_size),
+            cost=jnp.where(accept, c_eval, state.cost),
+            cost_prev=jnp.where(accept, state.cost, state.cost_prev),
+            history=history,
+            accepted=state.accepted + counted.astype(state.accepted.dtype),
+        )
+        return new.step_size, accept, optx.RESULTS.successful, new
+
+
+class _RelaxedNewtonState(eqx.Module):
+    newton: Array  # the step is -step_size * newton
+    sensitivity: Array  # sqrt(diag H): the whitened-residual norm per unit of each parameter
+    decrement: Array  # g^T H^-1 g: twice the cost decrease the full step predicts
+    result: optx.RESULTS
+
+
+class _RelaxedNewtonDescent(optx.AbstractDescent):
+    """Jategaonkar's Gauss-Newton step `(sum J^T R^-1 J) dtheta = -sum J^T R^-1 v` with R from
+    the residuals at the current point, solved (Cholesky, `lineax`) on the 16x16-sized normal
+    equations after scaling every parameter to unit sensitivity."""
+
+    noise: NoiseModel
+
+    def init(self, y, f_info_struct):
+        del f_info_struct
+        return _RelaxedNewtonState(newton=jnp.zeros_like(y), sensitivity=jnp.ones_like(y),
+                                   decrement=jnp.array(jnp.inf, dtype=y.dtype),
+                                   result=optx.RESULTS.successful)
+
+    def query(self, y, f_info, state):
+        del state
+        v = f_info.residual
+        J = f_info.jac.as_matrix().reshape(*v.shape, y.shape[0])
+        H, g = self.noise.gradient_terms(v, J)
+        h = jnp.sqrt(jnp.diag(H))
+        d = jnp.where(h > 0, 1.0 / jnp.where(h > 0, h, 1.0), 0.0)
+        Hs = H * d[:, None] * d[None, :] + jnp.diag(jnp.where(h > 0, 0.0, 1.0))
+        op = lx.MatrixLinearOperator(Hs, lx.positive_semidefinite_tag)
+        out = lx.linear_solve(op, d * g, lx.Cholesky(), throw=False)
+        newton = d * out.value
+        return _RelaxedNewtonState(newton=newton, sensitivity=h, decrement=g @ newton,
+                                   result=optx.RESULTS.promote(out.result))
+
+    def step(self, step_size, state):
+        return -step_size * state.newton, state.result
+
+
+class RelaxedGaussNewton(optx.AbstractGaussNewton):
+    """Output-error maximum likelihood by Gauss-Newton with the noise covariance relaxed at
+    every step (Jategaonkar's method), built from optimistix's parts.
+
+    The residual function returns the raw output errors `v = z - y(theta)` (`(..., ny)`); at
+    every accepted point R is re-estimated from them (Eq. 11), the step solves
+    `(sum J^T R^-1 J) dtheta = -sum J^T R^-1 v`, and the step is halved until the likelihood
+    itself (Eq. 10 at the trial point's own R) decreases. It stops at an accepted point where
+    the next step is below `atol + rtol |theta|` for every parameter, measured in units of
+    unit sensitivity (`theta_i sqrt(H_ii)`), and the cost has settled (its last change, or
+    the decrease the next step predicts, below `cost_rtol (1 + |cost|)`); or after
+    `stall_steps` halvings in a row (no step lowers the cost: converged to round-off).
+    The relaxation converges linearly (here by a factor of about 40 per step), so a tight
+    `atol` costs a step or two.
+    """
+
+    rtol: float
+    atol: float
+    norm: Callable[[PyTree], Scalar]
+    descent: _RelaxedNewtonDescent
+    search: _RelaxedStepHalving
+    verbose: Callable[..., None]
+    cost_rtol: float
+    stall_steps: int = eqx.field(static=True)
+
+    def __init__(self, noise: NoiseModel, *, rtol: float = 1e-10, atol: float = 1e-9,
+                 cost_rtol: float = 1e-10, history_length: int = 60, stall_steps: int = 10):
+        self.rtol = rtol
+        self.atol = atol
+        self.norm = optx.max_norm
+        self.descent = _RelaxedNewtonDescent(noise)
+        self.search = _RelaxedStepHalving(noise, history_length)
+        self.verbose = lambda **kw: None
+        self.cost_rtol = cost_rtol
+        self.stall_steps = stall_steps
+
+    def terminate(self, fn, y, args, options, state, tags):
+        del fn, args, options, tags
+        s, d = state.search_state, state.descent_state
+        just_accepted = ~state.first_step & (state.num_steps_since_acceptance == 0) & (
+            s.accepted > 0)
+        tol = self.atol + self.rtol * jnp.abs(y) * d.sensitivity
+        step_small = jnp.all(jnp.abs(d.newton) * d.sensitivity <= tol)
+        cost_tol = self.cost_rtol * (1.0 + jnp.abs(s.cost))
+        cost_small = (jnp.abs(s.cost_prev - s.cost) <= cost_tol) | (0.5 * d.decrement <= cost_tol)
+        converged = just_accepted & step_small & cost_small
+        stalled = state.num_steps_since_acceptance >= self.stall_steps
+        return converged | stalled, state.result

@@ -15,8 +15,14 @@ from jaxtyping import Array, Bool, Float, Int
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
-from ..simulate._simulate import simulate
-from ._gauss_newton import DampedGaussNewton
+from ..simulate._simulate import simulate, simulate_sensitivities
+from ._gauss_newton import (
+    NoiseModel,
+    RelaxedGaussNewton,
+    jacobian_once,
+    ml_cost,
+    noise_covariance,
+)
 from ._start import least_squares_start
 from ._uncertainty import (
     coloured_residual_middle,
@@ -47,8 +53,10 @@ class FitResult(eqx.Module):
     - `cov`: the covariance matrix behind `std`; `corr` its correlation matrix.
     - `R`: the measurement-noise covariance estimate, Eq. (11).
     - `cost`: the negative log-likelihood, Eq. (10), at the estimate.
-    - `cost_history`: the cost after each relaxation pass (NaN after the last).
-    - `passes`, `steps`: relaxation passes and Gauss-Newton steps taken.
+    - `cost_history`: the cost after each accepted Gauss-Newton step, each of which also
+      relaxes R (NaN after the last).
+    - `passes`, `steps`: R relaxations (accepted Gauss-Newton steps) and Gauss-Newton
+      steps taken (evaluations, the start and any halved steps included).
     - `converged`: whether the cost and the parameters settled within tolerance.
     - `start`: the least-squares start values of the free parameters.
     """
@@ -102,18 +110,10 @@ def _raw_residuals(model, params, batch):
 
 def _noise_covariance(v, mask, diagonal: bool, floor):
     """Eq. (11): `R = 1/N sum_k v_k v_k^T` (or its diagonal), floored to stay invertible."""
-    N = jnp.sum(mask)
-    vv = v.reshape(-1, v.shape[-1])
-    R = vv.T @ vv / N
-    if diagonal:
-        R = jnp.diag(jnp.diag(R))
-    return R + jnp.diag(floor)
+    return noise_covariance(v, jnp.sum(mask), diagonal, floor)
 
 
-def _ml_cost(R, N, ny):
-    """Eq. (10) with R from Eq. (11): `N ny / 2 + N/2 ln det R + N ny / 2 ln 2 pi`."""
-    _, logdet = jnp.linalg.slogdet(R)
-    return 0.5 * N * ny + 0.5 * N * logdet + 0.5 * N * ny * jnp.log(2 * jnp.pi)
+_ml_cost = ml_cost  # Eq. (10) with R from Eq. (11), `(R, N, ny) -> cost`
 
 
 def _free_layout(model: GreyBoxModel, n_local_batch: int):
@@ -140,69 +140,53 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
                max_steps, rtol, cost_rtol, n_local_batch=0):
     """The whole estimator on one (padded) batch of experiments that share the parameters.
 
-    Pure and jit/vmap-able: the relaxation passes are a `lax.while_loop`, each pass an
-    `optimistix.least_squares` Gauss-Newton solve with R fixed (Eqs. 10-11). The solver works
-    on scaled parameters `s = theta / scale`, `scale` being the inverse norm of each column of
-    the whitened Jacobian at the start, so every `s` has unit sensitivity and the convergence
-    test treats all parameters alike, however small or poorly determined.
+    Pure and jit/vmap-able: one `optimistix.least_squares` solve with [`RelaxedGaussNewton`][]
+    (R relaxed by Eq. 11 at every Gauss-Newton step, the step halved on the likelihood of
+    Eq. 10). Each step's residuals and their Jacobian come from one diffrax solve of the
+    state with its forward sensitivities ([`simulate_sensitivities`][], equal to
+    `jax.jacfwd` through the RK4 simulation), handed to optimistix as the derivative of the
+    residual function ([`jacobian_once`][]). The uncertainty is computed from the Jacobian
+    at the estimate that the last step already holds. `max_passes` is unused (kept for the
+    signature: every step is a relaxation pass).
     """
-    ny = batch.z.shape[-1]
+    del max_passes
     N = jnp.sum(batch.mask)
     zstd = jnp.sqrt(jnp.sum((batch.z * batch.mask[..., None]) ** 2, axis=(0, 1)) / N)
     floor = (1e-9 * zstd + 1e-300) ** 2
+    noise = NoiseModel(N=N, floor=floor, diagonal=diagonal)
 
-    def raw(theta):
-        return _raw_residuals(model, _merge_batch(model, theta, n_local_batch), batch)
+    def residuals_and_jacobian(theta):
+        def one(e, b):
+            def params_of(th):  # flight b's parameters (its own local ones in joint fits)
+                m = _merge_batch(model, th, n_local_batch)
+                return {k: (v if jnp.ndim(v) == 0 else v[b]) for k, v in m.items()}
+            return simulate_sensitivities(model, e, params_of, theta)
 
-    def R_of(theta):
-        R = _noise_covariance(raw(theta), batch.mask, diagonal, floor)
-        ok = jnp.all(jnp.isfinite(R))
-        return jnp.where(ok, R, jnp.diag(zstd**2 + floor))
+        B = batch.t.shape[0]
+        if B == 1:  # no vmap: a batched solver loop selects on its whole state every step
+            first = jax.tree.map(lambda a: a[0], batch)
+            ys, dys = jax.tree.map(lambda a: a[None], one(first, 0))
+        else:
+            ys, dys = jax.vmap(one)(batch, jnp.arange(B))
+        m = batch.mask[..., None]
+        return (batch.z - ys) * m, -dys * m[..., None]
 
-    R0 = R_of(theta0)
-    Linv0 = jnp.linalg.inv(jnp.linalg.cholesky(R0))
-    J0 = jax.jacfwd(lambda th: (raw(th) @ Linv0.T).ravel())(theta0)
-    colnorm = jnp.sqrt(jnp.sum(jnp.where(jnp.isfinite(J0), J0, 0.0) ** 2, axis=0))
-    scale = jnp.where(colnorm > 0, 1.0 / colnorm, jnp.maximum(jnp.abs(theta0), 1.0))
-    s0 = theta0 / scale
-
-    def whitened(s, Linv):
-        w = (raw(s * scale)) @ Linv.T
-        return jnp.where(jnp.isfinite(w), w, jnp.inf)
-
-    solver = DampedGaussNewton(rtol=rtol, atol=1e-9)
-
-    def one_pass(carry):
-        s, R, cost_prev, k, steps, hist, _ = carry
-        Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
-        sol = optx.least_squares(
-            whitened, solver, s, args=Linv, max_steps=max_steps, throw=False,
-        )
-        s_new = sol.value
-        R_new = R_of(s_new * scale)
-        cost = _ml_cost(R_new, N, ny)
-        better = jnp.isfinite(cost)
-        s_new = jnp.where(better, s_new, s)
-        done = better & (jnp.abs(cost - cost_prev) <= cost_rtol * (1.0 + jnp.abs(cost)))
-        hist = hist.at[k].set(cost)
-        return s_new, R_new, cost, k + 1, steps + sol.stats["num_steps"], hist, done
-
-    def cond(carry):
-        *_, k, _, _, done = carry
-        return (k < max_passes) & ~done
-
-    hist0 = jnp.full(max_passes, jnp.nan)
-    init = (s0, R0, jnp.inf, jnp.array(0), jnp.array(0), hist0, jnp.array(False))
-    s, R, cost, passes, steps, hist, done = jax.lax.while_loop(cond, one_pass, init)
+    residuals = jacobian_once(residuals_and_jacobian)
+    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=1e-9, cost_rtol=cost_rtol,
+                                history_length=max_steps)
+    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
+                             throw=False)
+    state = sol.state
+    theta = sol.value
+    v = state.f_info.residual  # (B, n, ny), at theta: the last accepted point
+    J = state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])  # dv/dtheta
+    R = noise.R(v)
+    cost = state.search_state.cost
 
     # Uncertainty at the estimate: Cramer-Rao, and corrected for coloured residuals.
     Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
-
-    def per_sample(s):
-        return raw(s * scale) @ Linv.T  # (B, n, ny)
-
-    w = per_sample(s)
-    Sw = -jax.jacfwd(per_sample)(s) / scale  # d(whitened y)/d theta: (B, n, ny, p)
+    w = v @ Linv.T
+    Sw = -jnp.einsum("bkip,ji->bkjp", J, Linv)  # d(whitened y)/d theta: (B, n, ny, p)
     M = fisher_information(Sw.reshape(-1, Sw.shape[-1]))
     # Lags never cross from one experiment into the next. Bartlett lag window spanning
     # LAG_WINDOW_FACTOR residual correlation lengths (>= 2 samples, <= a quarter record).
@@ -214,11 +198,24 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     cov_cr = covariance(M)
     cov_c = covariance(M, middle)
     finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
-    return dict(theta=s * scale, R=R, cost=cost, finite=finite, passes=passes, steps=steps,
-                hist=hist, converged=done, M=M, cov_cr=cov_cr, cov=cov_c)
+    merged = _merge_batch(model, theta, n_local_batch)
+    first = {k: (v[0] if jnp.ndim(v) else v) for k, v in merged.items()}  # flight 0's locals
+    return dict(theta=theta, R=R, cost=cost, finite=finite, params=first,
+                std=jnp.sqrt(jnp.diag(cov_c)), std_cr=jnp.sqrt(jnp.diag(cov_cr)),
+                corr=correlation(cov_c),
+                passes=state.search_state.accepted, steps=sol.stats["num_steps"],
+                hist=state.search_state.history,
+                converged=sol.result == optx.RESULTS.successful, M=M, cov_cr=cov_cr,
+                cov=cov_c)
 
 
 _fit_batch_jit = eqx.filter_jit(_fit_batch)
+
+
+@eqx.filter_jit
+def _fit_one_jit(model, theta0, exp: Experiment, **kw):
+    """[`_fit_batch`][] on a single experiment (the batch axis added inside the program)."""
+    return _fit_batch(model, theta0, jax.tree.map(lambda a: a[None], exp), **kw)
 
 
 def _check_excitation(model: GreyBoxModel, exps: Sequence[Experiment], names: Sequence[str]):
@@ -260,11 +257,13 @@ def fit(
 ) -> FitResult:
     """Estimate the free parameters of `model` by output-error maximum likelihood.
 
-    The cost is the negative log-likelihood of Eq. (10); the measurement-noise covariance R
-    is relaxed (Eq. 11): fixed R, a Gauss-Newton solve over the parameters (optimistix, with
-    Jacobians by forward-mode autodiff through the diffrax RK4 simulation and step halving),
-    then R updated from the residuals, until the cost settles. Several experiments are fitted
-    together (one parameter set, each integrated from its own initial state).
+    The cost is the negative log-likelihood of Eq. (10), minimised by Gauss-Newton
+    (optimistix) with the measurement-noise covariance R relaxed (Eq. 11) at every step, as
+    in Jategaonkar's output-error method: R from the current residuals, the Gauss-Newton step
+    `(sum J^T R^-1 J) dtheta = -sum J^T R^-1 v`, halved until the likelihood decreases. The
+    Jacobians come from the forward sensitivity equations integrated with the state in one
+    diffrax RK4 solve. Several experiments are fitted together (one parameter set, each
+    integrated from its own initial state).
 
     **Arguments:**
     - `model`: the [`fwid.GreyBoxModel`][]; its free parameters are estimated.
@@ -273,7 +272,11 @@ def fit(
     - `start`: `"least-squares"` (equation error, as the paper), `"model"` (the model's
       current values), or a model whose values to start from.
     - `noise`: `"full"` R (Eq. 11) or `"diagonal"` (uncorrelated output noise).
-    - `max_passes`, `max_steps`: relaxation passes, Gauss-Newton steps per pass.
+    - `max_steps`: Gauss-Newton steps (each relaxes R). `max_passes` is accepted for
+      compatibility and unused (R used to be relaxed between whole Gauss-Newton solves).
+    - `rtol`: stop when the next step is below `1e-9 + rtol |theta_i|` for every parameter,
+      in units in which each has unit sensitivity (about its standard deviation), ...
+    - `cost_rtol`: ... and the cost has settled to `cost_rtol (1 + |cost|)`.
     - `local_per_flight`: with several experiments, estimate the model's `local` parameters
       (bias terms) separately for each one (named `name@i`); otherwise they are shared.
     - `progress`: print a line when the fit starts and ends.
@@ -291,16 +294,18 @@ def fit(
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
               f"{', '.join(names)} ...", flush=True)
-    out = _fit_batch_jit(
-        start_model, theta0, stack_experiments(exps), diagonal=(noise == "diagonal"),
+    fn, data = (_fit_one_jit, exps[0]) if len(exps) == 1 else (_fit_batch_jit,
+                                                               stack_experiments(exps))
+    out = fn(
+        start_model, theta0, data, diagonal=(noise == "diagonal"),
         max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
         n_local_batch=n_local,
     )
     result = _result(model, start_model, theta0, out, names, n_local)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
-        print(f"fwid: {model.name} fit {state} in {int(result.passes)} passes, "
-              f"{int(result.steps)} Gauss-Newton steps, {time.perf_counter() - t0:.1f} s",
+        print(f"fwid: {model.name} fit {state} in {int(result.steps)} Gauss-Newton steps "
+              f"({int(result.passes)} R relaxations), {time.perf_counter() - t0:.1f} s",
               flush=True)
     return result
 
@@ -322,10 +327,11 @@ def _prepare(model, exps, names, start, n_local):
     else:
         raise ValueError(f"start must be 'least-squares', 'model' or a model, not {start!r}")
     glob, loc, _ = _free_layout(model, n_local)
-    theta0 = jnp.concatenate([
-        jnp.stack([start_model.params[k] for k in glob]) if glob else jnp.zeros(0),
-        *[jnp.broadcast_to(start_model.params[k], (n_local,)) for k in loc],
-    ])
+    vals = jax.device_get({k: start_model.params[k] for k in (*glob, *loc)})
+    theta0 = jnp.asarray(np.concatenate([
+        np.array([vals[k] for k in glob], dtype=float),
+        *[np.full(n_local, vals[k], dtype=float) for k in loc],
+    ]))
     return start_model, theta0
 
 
@@ -339,18 +345,14 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
             "start values (`start=model.with_params(...)`)"
         )
     _check_information(out, free_names, names)
-    theta = out["theta"]
-    cov = out["cov"]
-    merged = _merge_batch(model, theta, n_local)
-    first = {k: (v[0] if (k in loc and n_local) else v) for k, v in merged.items()}
     return FitResult(
-        model=start_model.with_params(first),
+        model=eqx.tree_at(lambda m: m.params, start_model, dict(out["params"])),
         names=tuple(free_names),
-        theta=theta,
-        std=jnp.sqrt(jnp.diag(cov)),
-        std_cr=jnp.sqrt(jnp.diag(out["cov_cr"])),
-        cov=cov,
-        corr=correlation(cov),
+        theta=out["theta"],
+        std=out["std"],
+        std_cr=out["std_cr"],
+        cov=out["cov"],
+        corr=out["corr"],
         R=out["R"],
         cost=out["cost"],
         cost_history=out["hist"],
@@ -363,6 +365,9 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
 
 @eqx.filter_jit
 def _fit_each_batched(model, theta0s, batches, **kw):
+    if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
+        out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
+        return jax.tree.map(lambda a: a[None], out)
     return jax.vmap(lambda th, b: _fit_batch(model, th, b, **kw))(theta0s, batches)
 
 

@@ -112,10 +112,13 @@ class GreyBoxModel(eqx.Module):
     def with_params(self, values: Mapping[str, float] | None = None, **kw) -> "GreyBoxModel":
         """A copy with some parameter values replaced."""
         new = dict(self.params)
+        dtype = jnp.asarray(0.0).dtype
         for k, v in {**(values or {}), **kw}.items():
             if k not in new:
                 raise KeyError(f"{self.name}: no parameter '{k}' (has {', '.join(new)})")
-            new[k] = jnp.asarray(v, dtype=float)
+            # (a float scalar array already is what jnp.asarray would make: skip the dispatch)
+            ready = isinstance(v, jax.Array) and v.dtype == dtype and v.ndim == 0
+            new[k] = v if ready else jnp.asarray(v, dtype=float)
         return eqx.tree_at(lambda m: m.params, self, new)
 
     def with_free(self, free: Sequence[str]) -> "GreyBoxModel":

@@ -213,3 +213,31 @@ def test_simulate_on_padded_batch_matches_unpadded(model, ab):
     np.testing.assert_allclose(ys[0], np.asarray(simulate(model, e1)[1]), rtol=0, atol=1e-14)
     ref2 = numpy_rk4(*ab, t[:k], u2, -X0)
     np.testing.assert_allclose(ys[1, :k], ref2, rtol=0, atol=1e-12 * np.abs(ref2).max())
+
+
+def test_sensitivities_equal_jacfwd_of_simulate():
+    """One diffrax solve of the state and its sensitivity equations gives jax.jacfwd of the
+    RK4 simulation (Runge-Kutta commutes with differentiation), with or without an output
+    equation."""
+    from fwid.simulate._simulate import simulate_sensitivities
+
+    base = longitudinal(BIASES)
+
+    def h(x, u, p, c):
+        return jnp.stack([p["Mq"] * x[0] + u[0], x[1] ** 2, jnp.sin(x[3])])
+
+    with_h = fwid.GreyBoxModel(
+        base.f, states=base.states, inputs=base.inputs,
+        params={k: base.params[k] for k in base.param_names}, h=h, outputs=("a", "b", "c"),
+        constants=base.constants)
+    t = np.arange(300) * 0.005
+    u = 0.1 * np.sin(3 * t)[:, None]
+    for m in (base, with_h):
+        e = Experiment(t, u, np.zeros((t.size, len(m.outputs))), X0, CONSTS)
+        th = m.theta()
+        ys, dys = simulate_sensitivities(m, e, m.merge, th)
+        y_ref = simulate(m, e, m.merge(th))[1]
+        J = jax.jacfwd(lambda th_, m=m, e=e: simulate(m, e, m.merge(th_))[1])(th)
+        assert dys.shape == (t.size, len(m.outputs), th.shape[0])
+        np.testing.assert_allclose(ys, y_ref, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(dys, J, rtol=0, atol=1e-12 * float(jnp.max(jnp.abs(J))))
