@@ -3,6 +3,14 @@
 Importing fwid turns on JAX's 64-bit mode (`jax_enable_x64`): output-error estimation needs
 float64 (Gauss-Newton with tight tolerances never terminates in float32). Set the environment
 variable `FWID_NO_X64=1` to keep JAX's default and manage the precision yourself.
+
+It also gives JAX one CPU device per CPU core available to the process (`jax_num_cpu_devices`,
+at most 8), so that `fwid.fit_each` and joint fits spread their flights over the cores; JAX's
+default is one CPU device, on which XLA runs each flight loop on one core. This only happens
+when JAX has run nothing yet and nobody chose a count (`jax_num_cpu_devices`, or
+`--xla_force_host_platform_device_count` in `XLA_FLAGS`); `FWID_CPU_DEVICES=N` sets N
+(`FWID_CPU_DEVICES=1`: leave JAX's default). Computations that are not spread run on the first
+device as before.
 """
 
 import os as _os
@@ -11,6 +19,28 @@ import jax as _jax
 
 if not _os.environ.get("FWID_NO_X64"):
     _jax.config.update("jax_enable_x64", True)
+
+
+def _cpu_devices() -> None:
+    wanted = _os.environ.get("FWID_CPU_DEVICES")
+    if wanted is None:
+        if "xla_force_host_platform_device_count" in _os.environ.get("XLA_FLAGS", ""):
+            return
+        cores = len(_os.sched_getaffinity(0)) if hasattr(_os, "sched_getaffinity") else (
+            _os.cpu_count() or 1)
+        wanted = min(cores, 8)
+    try:
+        from jax._src import xla_bridge as _xb
+
+        if _xb.backends_are_initialized() or _jax.config.jax_num_cpu_devices != -1:
+            return
+        if int(wanted) > 1:
+            _jax.config.update("jax_num_cpu_devices", int(wanted))
+    except Exception:  # an older or newer JAX without these: keep its default
+        return
+
+
+_cpu_devices()
 
 from ._errors import (
     ExcitationError as ExcitationError,

@@ -226,11 +226,16 @@ class _RelaxedNewtonDescent(optx.AbstractDescent):
         h = jnp.sqrt(jnp.diag(H))
         d = jnp.where(h > 0, 1.0 / jnp.where(h > 0, h, 1.0), 0.0)
         Hs = H * d[:, None] * d[None, :] + jnp.diag(jnp.where(h > 0, 0.0, 1.0))
-        op = lx.MatrixLinearOperator(Hs, lx.positive_semidefinite_tag)
-        out = lx.linear_solve(op, d * g, lx.Cholesky(), throw=False)
-        newton = d * out.value
+        # Cholesky by hand rather than `lineax.linear_solve`: lineax compares the operand's
+        # sharding with the operator's, which fails inside `shard_map` (one device's flights).
+        factor = jax.scipy.linalg.cho_factor(Hs, lower=True)
+        newton = d * jax.scipy.linalg.cho_solve(factor, d * g)
+        ok = jnp.all(jnp.isfinite(newton))
+        newton = jnp.where(ok, newton, 0.0)
+        result = optx.RESULTS.where(ok, optx.RESULTS.successful,
+                                    optx.RESULTS.promote(lx.RESULTS.singular))
         return _RelaxedNewtonState(newton=newton, sensitivity=h, decrement=g @ newton,
-                                   result=optx.RESULTS.promote(out.result))
+                                   result=result)
 
     def step(self, step_size, state):
         return -step_size * state.newton, state.result

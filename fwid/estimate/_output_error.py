@@ -10,12 +10,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
+from jax.sharding import PartitionSpec
 from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
 from ..simulate._simulate import simulate, simulate_sensitivities
+from ._devices import device_count, flight_mesh, padded_count
 from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
@@ -364,11 +366,23 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
 
 
 @eqx.filter_jit
-def _fit_each_batched(model, theta0s, batches, **kw):
+def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
+    """[`_fit_batch`][] on each flight alone: `vmap` over the flights. With a device `mesh`
+    (axis `"flights"`, see [`flight_mesh`][]) each device runs its share of the flights as
+    its own `vmap` (`shard_map`: the fits are independent, the devices never wait for one
+    another)."""
     if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
         out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
         return jax.tree.map(lambda a: a[None], out)
-    return jax.vmap(lambda th, b: _fit_batch(model, th, b, **kw))(theta0s, batches)
+
+    def each(th, b):
+        return jax.vmap(lambda th1, b1: _fit_batch(model, th1, b1, **kw))(th, b)
+
+    if mesh is None:
+        return each(theta0s, batches)
+    spec = PartitionSpec("flights")
+    return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
+                         check_vma=False)(theta0s, batches)
 
 
 def fit_each(
@@ -396,22 +410,29 @@ def fit_each(
     exps = list(experiments)
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
-    starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
-    n = max(e.n for e in exps)
-    batches = [stack_experiments([e], n=n) for e in exps]
-    stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *batches)
-    theta0s = jnp.stack([th for _, th in starts])
+    if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
+        starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
+    else:  # one start for all (the checks still run on every flight)
+        starts = [_prepare(model, exps, names, start, 0)] * len(exps)
+    # Every device gets the same number of flights: the batch is topped up with copies of
+    # the last flight, whose results are dropped.
+    B = padded_count(len(exps))
+    fill = [exps[-1]] * (B - len(exps))
+    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill))
+    theta0s = jnp.asarray(np.stack([np.asarray(th) for _, th in starts + starts[-1:] * len(fill)]))
     if progress:
-        print(f"fwid: fitting {model.name} to {len(exps)} flights in one batched call ...",
+        print(f"fwid: fitting {model.name} to {len(exps)} flights in one batched call"
+              + (f" on {device_count()} devices" if device_count() > 1 else "") + " ...",
               flush=True)
-    out = _fit_each_batched(
-        model, theta0s, stacked, diagonal=(noise == "diagonal"), max_passes=max_passes,
+    out = jax.device_get(_fit_each_batched(
+        model, theta0s, stacked, flight_mesh(B), diagonal=(noise == "diagonal"), max_passes=max_passes,
         max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol, n_local_batch=0,
-    )
-    results = [
-        _result(model, sm, th, jax.tree.map(lambda x: x[i], out), [names[i]], 0)
-        for i, (sm, th) in enumerate(starts)
-    ]
+    ))
+    # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
+    # arrays flight by flight costs more than the fits of a large batch).
+    per_flight = jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])
+    results = [_result(model, sm, th, o, [n], 0)
+               for (sm, th), o, n in zip(starts, per_flight, names)]
     if progress:
         ok = sum(bool(r.converged) for r in results)
         print(f"fwid: {ok}/{len(results)} fits converged, {time.perf_counter() - t0:.1f} s",

@@ -106,7 +106,7 @@ def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Exper
     keys = sorted(set().union(*(e.consts for e in exps)))
     have_forces = all(e.forces is not None for e in exps)
 
-    def pad(e: Experiment) -> Experiment:
+    def pad(e: Experiment):
         k = n - e.n
         t = np.asarray(e.t)
         dt = t[1] - t[0]
@@ -116,18 +116,20 @@ def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Exper
             a = np.asarray(a)
             return np.concatenate([a, np.repeat(a[-1:], k, axis=0)], axis=0)
 
-        consts = {key: e.consts.get(key, np.nan) for key in keys}
-        mask = np.concatenate([np.asarray(e.mask), np.zeros(k)])
-        return Experiment(tpad, hold(e.u), hold(e.z), e.x0, consts, mask,
-                          hold(e.forces) if have_forces else None)
+        return dict(t=tpad, u=hold(e.u), z=hold(e.z), x0=np.asarray(e.x0),
+                    consts={key: np.asarray(e.consts.get(key, np.nan)) for key in keys},
+                    mask=np.concatenate([np.asarray(e.mask), np.zeros(k)]),
+                    forces=hold(e.forces) if have_forces else None)
 
-    padded = [pad(e) for e in exps]
+    padded = [pad(e) for e in exps]  # numpy throughout: one transfer per field at the end
+
+    def stacked(field):
+        return np.stack([p[field] for p in padded])
+
     return Experiment(
-        jnp.stack([e.t for e in padded]), jnp.stack([e.u for e in padded]),
-        jnp.stack([e.z for e in padded]), jnp.stack([e.x0 for e in padded]),
-        {key: jnp.stack([e.consts[key] for e in padded]) for key in keys},
-        jnp.stack([e.mask for e in padded]),
-        jnp.stack([e.forces for e in padded]) if have_forces else None,
+        stacked("t"), stacked("u"), stacked("z"), stacked("x0"),
+        {key: np.stack([p["consts"][key] for p in padded]) for key in keys},
+        stacked("mask"), stacked("forces") if have_forces else None,
     )
 
 
