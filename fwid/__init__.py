@@ -36,7 +36,7 @@ def _cpu_devices() -> None:
             return
         if int(wanted) > 1:
             _jax.config.update("jax_num_cpu_devices", int(wanted))
-    except Exception:  # an older or newer JAX without these: keep its default
+    except (AttributeError, ImportError, RuntimeError, ValueError):  # a JAX without these
         return
 
 
