@@ -94,7 +94,7 @@ from .simulate import (
     unstack_experiments as unstack_experiments,
 )
 from .estimate import (
-    DampedGaussNewton as DampedGaussNewton,
+    RelaxedGaussNewton as RelaxedGaussNewton,
     FitResult as FitResult,
     fit as fit,
     fit_each as fit_each,
@@ -121,6 +121,10 @@ from ._identify import (
     Identification as Identification,
     evaluate as evaluate,
     identify as identify,
+)
+from ._compare import (
+    JointComparison as JointComparison,
+    compare_joint as compare_joint,
 )
 from ._identify_flapping import (
     CombinedIdentification as CombinedIdentification,

@@ -33,7 +33,9 @@ def _parser() -> argparse.ArgumentParser:
     i.add_argument("data", nargs="+", help="CSV files or folders of them")
     i.add_argument("--model", choices=("lon", "lat", "flap", "combined"), required=True)
     i.add_argument("--joint", action="store_true",
-                   help="one parameter set for all flights (each keeps its own biases)")
+                   help="one parameter set for all flights (each keeps its own biases); with "
+                   "--validate, each flight is also fitted alone and the report says which "
+                   "validates better on the held-out flights (joint_vs_individual)")
     i.add_argument("--validate", nargs="+", default=[], metavar="DATA")
     i.add_argument("--out", default=None, help="folder for report.json and the figures")
     i.add_argument("--cutoff", type=float, default=5.0, help="cycle-averaged / flapping split [Hz]")
@@ -75,6 +77,11 @@ def _identify(args) -> int:
                           cutoff=args.cutoff, progress=not args.quiet)
     report = identification_report(ident)
     print(identification_summary(report))
+    if args.joint and validate and len(flights) > 1:  # issue 4: does sharing pay off?
+        comparison = fwid.compare_joint(flights, args.model, validate=validate, joint=ident,
+                                        cutoff=args.cutoff, progress=not args.quiet)
+        report["joint_vs_individual"] = comparison.to_json()
+        print("\n" + comparison.summary_text())
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)

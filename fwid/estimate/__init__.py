@@ -1,4 +1,4 @@
-from ._gauss_newton import DampedGaussNewton as DampedGaussNewton
+from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
 from ._output_error import FitResult as FitResult, fit as fit, fit_each as fit_each
 from ._start import least_squares_start as least_squares_start
 from ._uncertainty import (

@@ -1,0 +1,109 @@
+"""Several flights through `fwid identify`: one fit per flight (batched), the joint fit, and
+the joint-vs-individual comparison on held-out flights (issue 4, items 1 and 2)."""
+
+import json
+
+import numpy as np
+import pytest
+
+import fwid
+from fwid.cli import main
+from fwid.synth import DELFLY, lon_matrices
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    out = tmp_path_factory.mktemp("flights")
+    assert main(["simulate", str(out), "--flights", "5", "--seed", "11"]) == 0
+    return out
+
+
+def _identify(folder, out, *extra):
+    train = [str(folder / f"lon_{i}.csv") for i in range(3)]
+    test = [str(folder / f"lon_{i}.csv") for i in (3, 4)]
+    assert main(["identify", *train, "--model", "lon", "--validate", *test, "--out", str(out),
+                 "--quiet", *extra]) == 0
+    return json.loads((out / "report.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def each(folder, tmp_path_factory):
+    return _identify(folder, tmp_path_factory.mktemp("each"))
+
+
+@pytest.fixture(scope="module")
+def joint(folder, tmp_path_factory):
+    out = tmp_path_factory.mktemp("joint")
+    return _identify(folder, out, "--joint"), out
+
+
+def _true_wn():
+    lam = np.linalg.eigvals(lon_matrices(DELFLY)[0])
+    return np.abs(lam[np.abs(lam.imag) > 0][0])
+
+
+def test_per_flight_fits_and_their_spread(each):
+    """Without --joint: one fit per flight (CONTRACTS: per_flight), the top level their mean,
+    and the modes' spread over the flights (Figures 8 and 11)."""
+    per = each["per_flight"]
+    assert [p["flight"] for p in per] == ["lon_0.csv", "lon_1.csv", "lon_2.csv"]
+    mq = [p["parameters"]["Mq"]["value"] for p in per]
+    assert each["parameters"]["Mq"]["value"] == pytest.approx(np.mean(mq), rel=1e-12)
+    assert each["parameters"]["Mq"]["std"] == pytest.approx(np.std(mq, ddof=1), rel=1e-12)
+    spread = each["modes_spread"]["oscillatory"]
+    wn = [next(m["wn"] for m in p["modes"] if m["kind"] == "oscillatory") for p in per]
+    assert spread["wn_mean"] == pytest.approx(np.mean(wn), rel=1e-12)
+    assert spread["wn_mean"] == pytest.approx(_true_wn(), rel=0.02)  # Table 3's mode
+    assert "joint_vs_individual" not in each
+
+
+def test_joint_fit_has_one_parameter_set_and_biases_per_flight(joint):
+    report, out = joint
+    assert report["joint"] is True and "per_flight" not in report
+    assert {f"bq@{i}" for i in range(3)} <= set(report["local_parameters"])
+    osc = [m for m in report["modes"] if m["kind"] == "oscillatory"][0]
+    assert osc["wn"] == pytest.approx(_true_wn(), rel=0.02)
+    assert (out / "poles.png").stat().st_size > 0
+
+
+def test_joint_vs_individual_block_is_consistent(joint, each):
+    """The comparison's numbers recomputed from its own rows, and its individual models are
+    those of the run without --joint (same flights, same fits)."""
+    c = joint[0]["joint_vs_individual"]
+    rows = c["held_out"]
+    assert [r["flight"] for r in rows] == ["lon_3.csv", "lon_4.csv"]
+    for r in rows:
+        assert r["individual_best"] <= r["individual_median"] <= r["individual_worst"]
+        assert r["joint"] > 0 and r["best_individual"] in c["training_flights"]
+    s = c["summary"]
+    ratio = np.median([r["joint"] / r["individual_median"] for r in rows])
+    assert s["ratio"] == pytest.approx(ratio, rel=1e-12)
+    assert s["joint_better_on"] == sum(r["joint"] < r["individual_median"] for r in rows)
+    expected = "joint" if ratio < 0.98 else "individual" if ratio > 1.02 else "tie"
+    assert s["verdict"] == expected
+    wn_each = each["modes_spread"]["oscillatory"]["wn_mean"]
+    assert c["modes"]["individual_spread"]["oscillatory"]["wn_mean"] == pytest.approx(
+        wn_each, rel=1e-9)
+
+
+def test_scores_are_those_of_the_plain_validation(joint, each):
+    """The comparison's joint and mean-model scores are the held-out metrics that the runs
+    with and without --joint report for the same flights (validation_flights)."""
+    c = joint[0]["joint_vs_individual"]
+
+    def score(metrics):
+        return np.mean([metrics[k]["rms_pct"] for k in c["outputs"]])
+
+    for r, vj, ve in zip(c["held_out"], joint[0]["validation_flights"],
+                         each["validation_flights"]):
+        assert r["flight"] == vj["flight"] == ve["flight"]
+        assert r["joint"] == pytest.approx(score(vj["metrics"]), rel=1e-9)
+        assert r["mean_model"] == pytest.approx(score(ve["metrics"]), rel=1e-9)
+
+
+def test_needs_two_training_flights_and_held_out_ones(folder):
+    flights = fwid.load_flights(folder / "lon_0.csv", folder / "lon_1.csv")
+    with pytest.raises(fwid.InputError, match="at least two"):
+        fwid.compare_joint(flights[:1], "lon", validate=flights[1:])
+    with pytest.raises(fwid.InputError, match="held-out"):
+        fwid.compare_joint(flights, "lon", validate=[])
