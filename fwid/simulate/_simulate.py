@@ -27,6 +27,26 @@ def _vector_field(tau, x, args):
     return model.f(x, input_at(tau, t0, dt, u), params, consts)
 
 
+def _solve_at_samples(vector_field, y0, t, args=None):
+    """Classical RK4 (Sec. IV.B) from `t[0]`, one step per sample interval (`StepTo` the
+    sample times), the solution saved at every sample; forward-mode differentiable."""
+    sol = diffrax.diffeqsolve(
+        diffrax.ODETerm(vector_field),
+        RK4(),
+        t0=t[0],
+        t1=t[-1],
+        dt0=None,
+        y0=y0,
+        args=args,
+        saveat=diffrax.SaveAt(t0=True, steps=True),
+        stepsize_controller=diffrax.StepTo(ts=t),
+        adjoint=diffrax.ForwardMode(),
+        max_steps=t.shape[0] - 1,
+        throw=False,
+    )
+    return sol.ys
+
+
 def simulate(
     model: GreyBoxModel,
     exp: Experiment,
@@ -55,22 +75,7 @@ def simulate(
         xs = jnp.zeros((t.shape[0], 0))
         return xs, _outputs(model, xs, exp.u, params, exp.consts)
     dt = t[1] - t[0]
-    args = (model, params, t[0], dt, exp.u, exp.consts)
-    sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(_vector_field),
-        RK4(),
-        t0=t[0],
-        t1=t[-1],
-        dt0=None,
-        y0=x0,
-        args=args,
-        saveat=diffrax.SaveAt(t0=True, steps=True),
-        stepsize_controller=diffrax.StepTo(ts=t),
-        adjoint=diffrax.ForwardMode(),
-        max_steps=t.shape[0] - 1,
-        throw=False,
-    )
-    xs = sol.ys
+    xs = _solve_at_samples(_vector_field, x0, t, (model, params, t[0], dt, exp.u, exp.consts))
     ys = _outputs(model, xs, exp.u, params, exp.consts)
     return xs, ys
 
@@ -122,20 +127,8 @@ def simulate_sensitivities(
 
     # the state and its sensitivities in one array: row 0 is x, rows 1.. are dx/dtheta_i
     y0 = jnp.concatenate([exp.x0[None], jnp.zeros((p, nx), dtype=theta.dtype)], axis=0)
-    sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(vector_field),
-        RK4(),
-        t0=t[0],
-        t1=t[-1],
-        dt0=None,
-        y0=y0,
-        saveat=diffrax.SaveAt(t0=True, steps=True),
-        stepsize_controller=diffrax.StepTo(ts=t),
-        adjoint=diffrax.ForwardMode(),
-        max_steps=t.shape[0] - 1,
-        throw=False,
-    )
-    xs, Ss = sol.ys[:, 0], sol.ys[:, 1:]  # (n, nx), (n, p, nx)
+    ys_aug = _solve_at_samples(vector_field, y0, t)
+    xs, Ss = ys_aug[:, 0], ys_aug[:, 1:]  # (n, nx), (n, p, nx)
     if model.outputs_are_states:
         return xs, jnp.swapaxes(Ss, 1, 2)
     ys, dys = jax.vmap(lambda x, S, uk: jvps(
@@ -146,15 +139,11 @@ def simulate_sensitivities(
 def _outputs(model, xs, u, params, consts):
     if model.outputs_are_states:
         return xs
-
-
     return jax.vmap(lambda x, uk: model.h(x, uk, params, consts))(xs, u)
 
 
 def simulate_forces(model: GreyBoxModel, xs, exp: Experiment, params: Params | None = None):
     """The model's aerodynamic forces and moments (Eqs. 1-6) along a simulated trajectory."""
-
-
     params = model.params if params is None else params
     if model.forces is None:
         raise ValueError(f"model {model.name!r} has no force model")
