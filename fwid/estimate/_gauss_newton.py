@@ -36,6 +36,14 @@ class NoiseModel(eqx.Module):
     floor: Array  # (ny,) added to R's diagonal so that it stays invertible
     diagonal: bool = eqx.field(static=True)
 
+    @classmethod
+    def of_data(cls, z, mask, diagonal: bool) -> "NoiseModel":
+        """For measured outputs `z` (`(..., n, ny)`) with sample `mask` (`(..., n)`): N the
+        real samples, and a floor of `(1e-9 x the outputs' RMS)^2` on R's diagonal."""
+        N = jnp.sum(mask)
+        zstd = jnp.sqrt(jnp.sum((z * mask[..., None]) ** 2, axis=tuple(range(z.ndim - 1))) / N)
+        return cls(N=N, floor=(1e-9 * zstd + 1e-300) ** 2, diagonal=diagonal)
+
     def R(self, v):
         return noise_covariance(v, self.N, self.diagonal, self.floor)
 

@@ -22,8 +22,6 @@ from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
     jacobian_once,
-    ml_cost,
-    noise_covariance,
 )
 from ._start import least_squares_start
 from ._uncertainty import (
@@ -33,7 +31,6 @@ from ._uncertainty import (
     covariance,
     fisher_information,
 )
-
 
 # The Bartlett lag window of the coloured-residual bounds spans this many residual
 # correlation lengths (see `benchmarks/calibration.py` for how it was chosen).
@@ -110,14 +107,6 @@ def _raw_residuals(model, params, batch):
     return (batch.z - y) * batch.mask[..., None]
 
 
-def _noise_covariance(v, mask, diagonal: bool, floor):
-    """Eq. (11): `R = 1/N sum_k v_k v_k^T` (or its diagonal), floored to stay invertible."""
-    return noise_covariance(v, jnp.sum(mask), diagonal, floor)
-
-
-_ml_cost = ml_cost  # Eq. (10) with R from Eq. (11), `(R, N, ny) -> cost`
-
-
 def _free_layout(model: GreyBoxModel, n_local_batch: int):
     """The layout of the free vector: global names, local names, and every entry's name."""
     glob = [k for k in model.free if k not in model.local or n_local_batch == 0]
@@ -152,10 +141,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     signature: every step is a relaxation pass).
     """
     del max_passes
-    N = jnp.sum(batch.mask)
-    zstd = jnp.sqrt(jnp.sum((batch.z * batch.mask[..., None]) ** 2, axis=(0, 1)) / N)
-    floor = (1e-9 * zstd + 1e-300) ** 2
-    noise = NoiseModel(N=N, floor=floor, diagonal=diagonal)
+    noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
 
     def residuals_and_jacobian(theta):
         def one(e, b):
@@ -425,8 +411,9 @@ def fit_each(
               + (f" on {device_count()} devices" if device_count() > 1 else "") + " ...",
               flush=True)
     out = jax.device_get(_fit_each_batched(
-        model, theta0s, stacked, flight_mesh(B), diagonal=(noise == "diagonal"), max_passes=max_passes,
-        max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol, n_local_batch=0,
+        model, theta0s, stacked, flight_mesh(B), diagonal=(noise == "diagonal"),
+        max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
+        n_local_batch=0,
     ))
     # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
     # arrays flight by flight costs more than the fits of a large batch).

@@ -35,12 +35,11 @@ import scipy.linalg
 from jaxtyping import Array, Float
 
 from ..data._flight import Flight
+from ..estimate._gauss_newton import NoiseModel, ml_cost
 from ..estimate._output_error import (
     FitResult,
     _free_layout,
     _merge_batch,
-    _ml_cost,
-    _noise_covariance,
     _raw_residuals,
 )
 from ..models._greybox import GreyBoxModel, Params
@@ -492,11 +491,8 @@ def cutoff_cost(
         v = _raw_residuals(base, _merge_batch(base, theta, n_local), batch)
         if Rinv is not None:
             return 0.5 * jnp.einsum("...i,ij,...j->", v, Rinv, v)
-        N = jnp.sum(batch.mask)
-        ny = batch.z.shape[-1]
-        zstd = jnp.sqrt(jnp.sum((batch.z * batch.mask[..., None]) ** 2, axis=(0, 1)) / N)
-        floor = (1e-9 * zstd + 1e-300) ** 2  # as fwid.fit
-        return _ml_cost(_noise_covariance(v, batch.mask, diagonal, floor), N, ny)
+        noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)  # as fwid.fit
+        return ml_cost(noise.R(v), noise.N, batch.z.shape[-1])
 
     return L
 
