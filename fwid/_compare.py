@@ -107,18 +107,25 @@ def compare_joint(
     if not validate:
         raise InputError("comparing a joint fit with individual fits needs held-out flights "
                          "(validate=...)")
-    kw = dict(cutoff=cutoff, noise_cutoff=noise_cutoff, progress=progress)
+    kw = dict(validate=validate, cutoff=cutoff, noise_cutoff=noise_cutoff, progress=progress)
     joint = joint or identify(flights, model, joint=True, **kw)
     individual = individual or identify(flights, model, joint=False, **kw)
     outputs = list(joint.model.outputs)
+    names = [f.name for f in validate]
+
+    def validated(ident):  # identify's own validation of its summary model, if on these flights
+        return ident.validation if [v.name for v in ident.validation] == names else None
+
+    vj, vm = validated(joint), validated(individual)
     rows = []
-    for f in validate:
+    for i, f in enumerate(validate):
         exp = averaged(f, joint.model, cutoff, noise_cutoff)
 
-        def on_flight(m):
-            return evaluate(m, exp, f.name).metrics
+        def on_flight(m, exp=exp, name=f.name):
+            return evaluate(m, exp, name).metrics
 
-        mj, mm = on_flight(joint.model), on_flight(individual.model)
+        mj = vj[i].metrics if vj else on_flight(joint.model)
+        mm = vm[i].metrics if vm else on_flight(individual.model)
         mi = [on_flight(fr.model) for fr in individual.fits]
         si = np.array([_score(m, outputs) for m in mi])
         order = np.argsort(si)

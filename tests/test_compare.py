@@ -101,6 +101,18 @@ def test_scores_are_those_of_the_plain_validation(joint, each):
         assert r["mean_model"] == pytest.approx(score(ve["metrics"]), rel=1e-9)
 
 
+def test_held_out_scores_without_identify_validation(joint, folder):
+    """Given a joint identification made without held-out flights, the comparison simulates
+    the joint model on them itself: the same scores as identify's own validation (above)."""
+    flights = fwid.load_flights(*(folder / f"lon_{i}.csv" for i in range(5)))
+    plain = fwid.identify(flights[:3], "lon", joint=True)
+    assert plain.validation == []
+    c = fwid.compare_joint(flights[:3], "lon", validate=flights[3:], joint=plain)
+    for r, ref in zip(c.held_out, joint[0]["joint_vs_individual"]["held_out"]):
+        assert r["joint"] == pytest.approx(ref["joint"], rel=1e-9)
+        assert r["mean_model"] == pytest.approx(ref["mean_model"], rel=1e-9)
+
+
 def test_needs_two_training_flights_and_held_out_ones(folder):
     flights = fwid.load_flights(folder / "lon_0.csv", folder / "lon_1.csv")
     with pytest.raises(fwid.InputError, match="at least two"):
