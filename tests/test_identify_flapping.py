@@ -18,7 +18,6 @@ from scipy.integrate import solve_ivp
 import fwid
 from fwid import FitResult, Identification
 from fwid._identify import averaged, evaluate
-from fwid.estimate import refit_local_affine
 from fwid._identify_flapping import (
     flapping_report,
     identify_combined,
@@ -27,14 +26,12 @@ from fwid._identify_flapping import (
 )
 from fwid.cli import main
 from fwid.data import Flight
+from fwid.estimate import refit_local_affine
 from fwid.models import TABLE1, longitudinal
 from fwid.models._fourier import fourier_param_names, shift_phase
 
-TABLE7 = dict(
-    ax1=-7.09e-3, bx1=8.89e-2, ax2=3.09e-2, bx2=2.75e-2, ax3=7.32e-3, bx3=1.83e-2,
-    az1=4.02e-2, bz1=-5.64e-2, az2=-5.51e-3, bz2=4.24e-2, az3=1.42e-2, bz3=1.29e-2,
-    am1=-3.58e-4, bm1=3.20e-3, am2=-5.15e-4, bm2=2.69e-3, am3=5.44e-4, bm3=8.35e-4,
-)
+from .paper import TABLE7
+
 VEHICLE = dict(mass=0.0205, Ix=8e-5, Iy=6e-5, Iz=3e-5, Ixz=1e-6, g=9.81)
 TRIM = dict(u0=0.3, w0=0.6, theta0=1.2)
 SIGMA = dict(q=0.01, u=0.001, w=0.001, theta=5e-4, X=0.005, Z=0.005, M=2.5e-4, de=0.002)

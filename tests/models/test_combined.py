@@ -13,11 +13,8 @@ from fwid.models._combined import combined, force_parts
 from fwid.models._fourier import LAT_OUTPUTS, fourier_model
 from fwid.report._spectra import harmonic_amplitudes
 
-TABLE7 = dict(
-    ax1=-7.09e-3, bx1=8.89e-2, ax2=3.09e-2, bx2=2.75e-2, ax3=7.32e-3, bx3=1.83e-2,
-    az1=4.02e-2, bz1=-5.64e-2, az2=-5.51e-3, bz2=4.24e-2, az3=1.42e-2, bz3=1.29e-2,
-    am1=-3.58e-4, bm1=3.20e-3, am2=-5.15e-4, bm2=2.69e-3, am3=5.44e-4, bm3=8.35e-4,
-)
+from ..paper import TABLE7
+
 LAT_FOURIER = dict(
     ay1=4e-3, by1=-6e-3, ay2=2e-3, by2=1e-3, ay3=-1e-3, by3=5e-4,
     al1=3e-6, bl1=-2e-6, al2=1e-6, bl2=1e-6, al3=-5e-7, bl3=4e-7,
