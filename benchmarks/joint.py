@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import platform
 import sys
 import tempfile
 import time
@@ -128,9 +130,6 @@ def main(argv=None):
                       f"individual {c['individual_median_score']:.2f} mean-model "
                       f"{c['mean_model_score']:.2f} -> {c['verdict']} ({c['wall_s']:.0f} s)",
                       flush=True)
-    import os
-    import platform
-
     res = {"command": "python benchmarks/joint.py " + " ".join(argv or sys.argv[1:]),
            "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
            "cases": cases}
