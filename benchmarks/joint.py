@@ -47,7 +47,7 @@ def one_case(axis, duration, seed, n_train, n_test):
     t0 = time.perf_counter()
     cmp = fwid.compare_joint(train, axis, validate=test)
     wall = time.perf_counter() - t0
-    js = cmp.to_json()
+    js = fwid.report.joint_report(cmp)
     # the oscillatory mode of every fit, against the simulator's truth (Table 3 / Table 6)
     A = (synth.lon_matrices if axis == "lon" else synth.lat_matrices)(synth.DELFLY)[0]
     true_osc = _osc(fwid.modes(np.linalg.eigvals(A)))

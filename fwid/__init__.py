@@ -13,33 +13,9 @@ when JAX has run nothing yet and nobody chose a count (`jax_num_cpu_devices`, or
 device as before.
 """
 
-import os as _os
+from ._jax_setup import cpu_devices as _cpu_devices, enable_x64 as _enable_x64
 
-import jax as _jax
-
-if not _os.environ.get("FWID_NO_X64"):
-    _jax.config.update("jax_enable_x64", True)
-
-
-def _cpu_devices() -> None:
-    wanted = _os.environ.get("FWID_CPU_DEVICES")
-    if wanted is None:
-        if "xla_force_host_platform_device_count" in _os.environ.get("XLA_FLAGS", ""):
-            return
-        cores = len(_os.sched_getaffinity(0)) if hasattr(_os, "sched_getaffinity") else (
-            _os.cpu_count() or 1)
-        wanted = min(cores, 8)
-    try:
-        from jax._src import xla_bridge as _xb
-
-        if _xb.backends_are_initialized() or _jax.config.jax_num_cpu_devices != -1:
-            return
-        if int(wanted) > 1:
-            _jax.config.update("jax_num_cpu_devices", int(wanted))
-    except (AttributeError, ImportError, RuntimeError, ValueError):  # a JAX without these
-        return
-
-
+_enable_x64()
 _cpu_devices()
 
 from ._errors import (
@@ -106,30 +82,28 @@ from .diagnose import (
     diagnose as diagnose,
 )
 from .validate import (
+    eigenvalues as eigenvalues,
+    fit_metrics as fit_metrics,
+    modes as modes,
+)
+from .sensitivity import (
     cutoff_cost as cutoff_cost,
     eigenvalue_sensitivity as eigenvalue_sensitivity,
-    eigenvalues as eigenvalues,
     estimate_sensitivity_to_cutoff as estimate_sensitivity_to_cutoff,
-    fit_metrics as fit_metrics,
     metric_sensitivity as metric_sensitivity,
-    modes as modes,
     output_sensitivity as output_sensitivity,
     rank_sensitivities as rank_sensitivities,
 )
-from ._identify import (
-    FlightFit as FlightFit,
-    Identification as Identification,
-    evaluate as evaluate,
-    identify as identify,
-)
-from ._compare import (
-    JointComparison as JointComparison,
-    compare_joint as compare_joint,
-)
-from ._identify_flapping import (
+from .identify import (
     CombinedIdentification as CombinedIdentification,
     FlappingIdentification as FlappingIdentification,
+    FlightFit as FlightFit,
+    Identification as Identification,
+    JointComparison as JointComparison,
     SteadyVsManoeuvre as SteadyVsManoeuvre,
+    compare_joint as compare_joint,
+    evaluate as evaluate,
+    identify as identify,
     identify_combined as identify_combined,
     identify_flapping_model as identify_flapping_model,
     steady_vs_manoeuvre as steady_vs_manoeuvre,

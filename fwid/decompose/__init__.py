@@ -18,4 +18,5 @@ from ._frequency import flapping_phase as flapping_phase
 from ._split import Decomposition as Decomposition
 from ._split import cycle_averaged as cycle_averaged
 from ._split import decompose as decompose
+from ._split import edge_samples as edge_samples
 from ._split import flapping_part as flapping_part

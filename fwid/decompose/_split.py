@@ -220,3 +220,11 @@ def flapping_part(
         if k + "0" in trim:
             trim[k + "0"] = jnp.zeros_like(trim[k + "0"])
     return eqx.tree_at(lambda fl: fl.trim, out, trim)
+
+
+def edge_samples(n: int, dt: float, edge: float = 0.2) -> int:
+    """How many samples to drop at each end of an `n`-sample record split by the zero-phase
+    filters (Sec. III.B): `edge` seconds, where the filter sees past the record's ends; none
+    when fewer than 50 samples would remain."""
+    k = int(round(edge / dt))
+    return k if n - 2 * k >= 50 else 0

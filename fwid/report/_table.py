@@ -63,3 +63,50 @@ def identification_summary(report: dict) -> str:
     if "validation" in report["metrics"]:
         out += ["", metrics_table(report["metrics"]["validation"], "match with validation data:")]
     return "\n".join(out)
+
+
+def _peak_summary(peaks: dict) -> list[str]:
+    out = [f"{'flight':<22}{'signal':<7}" + "".join(f"{f'peak {i + 1} meas/model':>24}"
+                                                    for i in range(3))]
+    for name, d in peaks.items():
+        for k, v in d.items():
+            cells = "".join(f"{a:>11.3e}/{b:<10.3e}  " for a, b in zip(v["measured"], v["model"]))
+            out.append(f"{name[:21]:<22}{k:<7}{cells}")
+    return out
+
+
+def flapping_summary(report: dict) -> str:
+    """The terminal summary of `fwid identify --model flap|combined`."""
+    out = [f"fwid identify: model {report['model']}, flights: {', '.join(report['flights'])}"]
+    if "summary" in report:
+        out.append(f"({report['summary']})")
+    if report["model"] == "combined":
+        out += ["", "cycle-averaged part (Section IV):",
+                parameter_table(report["cycle_averaged"]["parameters"]), "",
+                modes_table(report["cycle_averaged"]["modes"])]
+        flap = report["flapping"]
+    else:
+        flap = report
+    out += ["", f"flapping part, Eq. (12), {flap['harmonics']} harmonics (Table 7):",
+            parameter_table(flap["parameters"])]
+    out += ["", "flapping frequency [Hz] and phase offset [rad] per flight:"]
+    for k, v in report["flapping_frequency"].items():
+        out.append(f"  {k:<28}{v:8.3f}{report['phase_offsets'].get(k, 0.0):+9.3f}")
+    title = ("flapping forces, match with estimation data (Table 8):"
+             if report["model"] == "flap" else
+             "combined model simulation, match with estimation data:")
+    out += ["", metrics_table(flap["metrics"]["estimation"] if report["model"] == "flap"
+                              else report["metrics"]["estimation"], title)]
+    if "validation" in report["metrics"]:
+        out += ["", metrics_table(report["metrics"]["validation"],
+                                  "match with validation data (phase aligned):")]
+    for name, s in report.get("steady_vs_manoeuvre", {}).items():
+        out += ["", f"{name}: steady flight vs manoeuvre (Figures 14 vs 12):",
+                f"{'output':<8}{'RMS steady':>12}{'% range':>9}{'non-harm %':>11}"
+                f"{'RMS manoeuvre':>15}{'% range':>9}{'non-harm %':>11}"]
+        for o in s["steady"]:
+            a, b = s["steady"][o], s["manoeuvre"][o]
+            out.append(f"{o:<8}{a['rms']:>12.3e}{a['rms_pct']:>9.2f}{a['nonharmonic_pct']:>11.2f}"
+                       f"{b['rms']:>15.3e}{b['rms_pct']:>9.2f}{b['nonharmonic_pct']:>11.2f}")
+    out += ["", "first flapping peaks, measured/model:"] + _peak_summary(report["peaks"])
+    return "\n".join(out)

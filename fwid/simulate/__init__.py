@@ -5,4 +5,5 @@ from ._experiment import (
     unstack_experiments as unstack_experiments,
 )
 from ._simulate import input_at as input_at, simulate as simulate, simulate_forces as simulate_forces
+from ._averaged import averaged as averaged
 from ._rk4 import RK4 as RK4

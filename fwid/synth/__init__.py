@@ -36,14 +36,13 @@ from ._inputs import (
     make_input as make_input,
     pulse as pulse,
 )
+from ._reconstruct import derivative as derivative, reconstruct_loads as reconstruct_loads
 from ._simulate import (
     COLUMNS as COLUMNS,
     DEFAULT_AMPLITUDE as DEFAULT_AMPLITUDE,
     NOISE as NOISE,
     FlapFrequency as FlapFrequency,
-    derivative as derivative,
     flapping_loads as flapping_loads,
-    reconstruct_loads as reconstruct_loads,
     simulate_flight as simulate_flight,
 )
 from ._write import (

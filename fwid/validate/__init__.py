@@ -1,10 +1,18 @@
+"""How well an identified model matches the data, and what its dynamics are.
+
+- [`fwid.fit_metrics`][] (`_metrics.py`): RMS, RMS as % of the range, R^2 and correlation per
+  output (Tables 2, 5, 8).
+- [`fwid.eigenvalues`][], [`fwid.modes`][] (`_modes.py`): eigenvalues of `A = df/dx` and the
+  modes they make (Tables 3 and 6).
+- [`fwid.harmonic_amplitudes`][], `nonharmonic_share` (`_harmonics.py`): the flapping peaks'
+  heights (Figure 12) and the flapping-band energy off the harmonics (Figures 12 vs 14).
+
+The derivatives of all of these are in `fwid.sensitivity`.
+"""
+
+from ._harmonics import (
+    harmonic_amplitudes as harmonic_amplitudes,
+    nonharmonic_share as nonharmonic_share,
+)
 from ._metrics import fit_metrics as fit_metrics
 from ._modes import eigenvalues as eigenvalues, modes as modes
-from ._sensitivity import (
-    cutoff_cost as cutoff_cost,
-    eigenvalue_sensitivity as eigenvalue_sensitivity,
-    estimate_sensitivity_to_cutoff as estimate_sensitivity_to_cutoff,
-    metric_sensitivity as metric_sensitivity,
-    output_sensitivity as output_sensitivity,
-    rank_sensitivities as rank_sensitivities,
-)

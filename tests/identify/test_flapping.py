@@ -17,20 +17,16 @@ from scipy.integrate import solve_ivp
 
 import fwid
 from fwid import FitResult, Identification
-from fwid._identify import averaged, evaluate
-from fwid._identify_flapping import (
-    flapping_report,
-    identify_combined,
-    identify_flapping_model,
-    steady_vs_manoeuvre,
-)
+from fwid.identify import evaluate, identify_combined, identify_flapping_model, steady_vs_manoeuvre
+from fwid.report import flapping_report
+from fwid.simulate import averaged
 from fwid.cli import main
 from fwid.data import Flight
 from fwid.estimate import refit_local_affine
 from fwid.models import TABLE1, longitudinal
 from fwid.models._fourier import fourier_param_names, shift_phase
 
-from .paper import TABLE7
+from ..paper import TABLE7
 
 VEHICLE = dict(mass=0.0205, Ix=8e-5, Iy=6e-5, Iz=3e-5, Ixz=1e-6, g=9.81)
 TRIM = dict(u0=0.3, w0=0.6, theta0=1.2)
@@ -236,7 +232,7 @@ def _canned_identify(flights, axis, *, joint=False, cutoff=5.0, progress=False):
 def test_combined_cli(data, tmp_path, monkeypatch):
     """`fwid identify --model combined`: the report (CONTRACTS section 3) and Figures 12,
     15-17 (the cycle-averaged estimator stubbed out, see above)."""
-    import fwid._identify_flapping as pipeline
+    from fwid.identify import _combined as pipeline
 
     monkeypatch.setattr(pipeline, "identify", _canned_identify)
     _, est, val = data

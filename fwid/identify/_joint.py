@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._errors import InputError
-from ._identify import Identification, averaged, evaluate, identify
-from .data._flight import Flight
-from .report._json import modes_spread
-from .validate._modes import eigenvalues, modes
+from .._errors import InputError
+from ..data._flight import Flight
+from ..simulate._averaged import averaged
+from ._cycle_averaged import Identification, identify
+from ._flight_fit import evaluate
 
 # A difference in the held-out error smaller than this (relative) is called a tie.
 TIE = 0.02
@@ -51,28 +51,6 @@ class JointComparison:
     individual: Identification
     held_out: list[dict]
     summary: dict
-
-    def to_json(self) -> dict:
-        ind = [modes(eigenvalues(f.model, self.individual.consts)) for f in self.individual.fits]
-        return {
-            "training_flights": list(self.joint.flights),
-            "outputs": list(self.joint.model.outputs),
-            "score": "mean over the outputs of rms_pct (RMS as % of the measured range), "
-                     "biases re-estimated on each held-out flight",
-            "held_out": self.held_out,
-            "summary": self.summary,
-            "modes": {"joint": self.joint.modes, "individual_spread": modes_spread(ind)},
-        }
-
-    def summary_text(self) -> str:
-        s = self.summary
-        better = {"joint": "the joint model validates better",
-                  "individual": "the individual models validate better",
-                  "tie": "neither validates clearly better"}[s["verdict"]]
-        return (f"joint vs individual on {s['held_out_flights']} held-out flight(s): {better} "
-                f"(held-out error ratio joint/individual {s['ratio']:.3f}, joint lower on "
-                f"{s['joint_better_on']} of {s['held_out_flights']}; vs the mean model "
-                f"{s['ratio_to_mean_model']:.3f})")
 
 
 def compare_joint(

@@ -1,4 +1,4 @@
-"""Sensitivities by autodiff (fwid.validate._sensitivity) against finite differences.
+"""Sensitivities by autodiff (fwid.sensitivity) against finite differences.
 
 One simulated DelFly flight and one tight fit are shared by the whole module (compiled once).
 Finite differences are central, with a relative step of 1e-5 (float64, smooth functions: the
@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 import fwid
-from fwid._identify import averaged
+from fwid.simulate import averaged
 from fwid.synth import write_flights
-from fwid.validate._sensitivity import (
+from fwid.sensitivity import (
     cutoff_cost,
     eigenvalue_sensitivity,
     estimate_sensitivity_to_cutoff,

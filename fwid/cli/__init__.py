@@ -1,0 +1,40 @@
+"""The `fwid` command line (CONTRACTS section 2): thin, it calls the public API.
+
+One module per command: `fwid simulate` (`_simulate.py`), `fwid identify` (`_identify.py`,
+all four models), `fwid diagnose` (`_diagnose.py`); the arguments are in `_parser.py`.
+
+Exit codes: 0 on success, 2 on bad input (one line on stderr: what and where), 1 on an
+internal error.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from ._diagnose import diagnose
+from ._identify import identify
+from ._parser import parser
+from ._simulate import simulate
+
+COMMANDS = {"simulate": simulate, "identify": identify, "diagnose": diagnose}
+
+
+def main(argv=None) -> int:
+    from fwid import InputError
+
+    args = parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command](args)
+    except InputError as e:
+        print(f"fwid: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("fwid: interrupted", file=sys.stderr)
+        return 1
+    except Exception as e:  # internal error: short message plus where, for a bug report
+        import traceback
+
+        tb = traceback.extract_tb(e.__traceback__)[-1]
+        print(f"fwid: internal error: {type(e).__name__}: {e} (at {tb.filename}:{tb.lineno}); "
+              "please report it", file=sys.stderr)
+        return 1

@@ -1,0 +1,28 @@
+"""`fwid diagnose`: where the model misses, which effect explains it, how far the held-out
+error shrinks once it is added."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+
+def diagnose(args) -> int:
+    import fwid
+    from fwid.report import diagnosis_summary, plot_gap_map, write_json
+
+    t0 = time.perf_counter()
+    train = fwid.load_flights(*args.train)
+    test = fwid.load_flights(*args.test)
+    say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
+    diag = fwid.diagnose(train, test, axis=args.axis, progress=say)
+    print(diagnosis_summary(diag))
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_gap_map(diag, path=out / "gap_map.png")
+        write_json(out / "diagnosis.json", diag.to_json())
+        print(f"\nfwid: diagnosis.json and gap_map.png in {out}/ "
+              f"({time.perf_counter() - t0:.1f} s)")
+    return 0

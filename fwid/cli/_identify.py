@@ -1,0 +1,126 @@
+"""`fwid identify`: identify a model from flights, print a summary, and write `report.json`
+and the figures to `--out` (the cycle-averaged models: Figures 6-11; the flapping and the
+combined model: Figures 12-17)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+
+def _stem(name: str) -> str:
+    return Path(name).stem
+
+
+def identify(args) -> int:
+    import fwid
+
+    t0 = time.perf_counter()
+    flights = fwid.load_flights(*args.data)
+    validate = fwid.load_flights(*args.validate) if args.validate else []
+    if args.model in ("flap", "combined"):
+        report, figures = _flapping(args, flights, validate)
+    else:
+        report, figures = _cycle_averaged(args, flights, validate)
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        for draw in figures:  # drawn once the report is known to be complete
+            draw(out)
+        fwid.write_json(out / "report.json", report)
+        print(f"\nfwid: report and figures in {out}/ ({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
+def _cycle_averaged(args, flights, validate):
+    """`--model lon|lat`: Section IV; with `--joint --validate`, joint vs individual."""
+    import fwid
+    from fwid.report import identification_summary, joint_report, joint_summary
+
+    ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
+                          cutoff=args.cutoff, progress=not args.quiet)
+    report = fwid.identification_report(ident)
+    print(identification_summary(report))
+    if args.joint and validate and len(flights) > 1:  # does sharing pay off?
+        comparison = fwid.compare_joint(flights, args.model, validate=validate, joint=ident,
+                                        cutoff=args.cutoff, progress=not args.quiet)
+        report["joint_vs_individual"] = joint_report(comparison)
+        print("\n" + joint_summary(comparison))
+
+    def figures(out):
+        for ff in ident.estimation:
+            fwid.plot_flight_fit(ff, path=out / f"fit_{_stem(ff.name)}.png",
+                                 title=f"{ff.name}: estimation ({args.model})")
+        for ff in ident.validation:
+            fwid.plot_flight_fit(ff, path=out / f"validation_{_stem(ff.name)}.png",
+                                 title=f"{ff.name}: validation ({args.model})")
+        eigs = [fwid.eigenvalues(f.model, ident.consts) for f in ident.fits]
+        labels = (ident.flights if len(ident.fits) > 1
+                  else ["joint" if args.joint else ident.flights[0]])
+        fwid.plot_poles(eigs, labels, path=out / "poles.png",
+                        title=f"{args.model} model eigenvalues")
+
+    return report, [figures]
+
+
+def _flapping(args, flights, validate):
+    """`--model flap|combined`: Sections V-VI (Figures 12-17)."""
+    import fwid
+    from fwid.report import combined_report, flapping_report, flapping_summary
+
+    progress = not args.quiet
+    figures = []
+
+    def time_and_spectrum(ff, f, path, title, **kw):
+        figures.append(lambda out: fwid.plot_time_and_spectrum(
+            ff, f=f, path=out / path, title=title, **kw))
+
+    if args.model == "flap":
+        ident = fwid.identify_flapping_model(flights, validate=validate, joint=args.joint,
+                                             cutoff=args.cutoff, progress=progress)
+        steady = []
+        for f in flights:
+            try:
+                steady.append(fwid.steady_vs_manoeuvre(f, ident.model.outputs, cutoff=args.cutoff))
+            except fwid.InputError as e:
+                if progress:
+                    print(f"fwid: steady vs manoeuvre skipped: {e}", flush=True)
+        report = flapping_report(ident, steady)
+        for ff in ident.estimation:
+            time_and_spectrum(ff, ident.frequencies[ff.name], f"flap_fit_{_stem(ff.name)}.png",
+                              f"{ff.name}: flapping forces, estimation (Figure 12)")
+        for ff in ident.validation:
+            time_and_spectrum(ff, ident.frequencies[ff.name],
+                              f"flap_validation_{_stem(ff.name)}.png",
+                              f"{ff.name}: flapping forces, validation, phase aligned (Figure 13)")
+        for s in steady:
+            figures.append(lambda out, s=s: fwid.plot_steady_vs_manoeuvre(
+                s.steady, s.manoeuvre, f=s.frequency,
+                path=out / f"steady_vs_manoeuvre_{_stem(s.flight)}.png",
+                title=f"{s.flight}: flapping model, steady flight vs manoeuvre (Figure 14)"))
+    else:
+        ident = fwid.identify_combined(flights, validate=validate, joint=args.joint,
+                                       cutoff=args.cutoff, progress=progress)
+        report = combined_report(ident)
+        model_labels = dict(measured_label="Measured", model_label="Model")
+        for ff in ident.flapping.estimation:
+            time_and_spectrum(ff, ident.frequencies[ff.name], f"flap_fit_{_stem(ff.name)}.png",
+                              f"{ff.name}: flapping forces, estimation (Figure 12)")
+        for ff in ident.estimation:
+            p = ident.parts[ff.name]
+            figures.append(lambda out, ff=ff, p=p: fwid.plot_superposition(
+                ff.t, ff.forces_measured, p["TA"], p["TV"], f=ident.frequencies[ff.name],
+                path=out / f"superposition_{_stem(ff.name)}.png",
+                title=f"{ff.name}: time-averaged + time-varying model (Figure 15)"))
+            time_and_spectrum(ff, ident.frequencies[ff.name],
+                              f"combined_fit_{_stem(ff.name)}.png",
+                              f"{ff.name}: combined model, estimation (Figure 16)", **model_labels)
+        for ff in ident.validation:
+            time_and_spectrum(ff, ident.frequencies[ff.name],
+                              f"combined_validation_{_stem(ff.name)}.png",
+                              f"{ff.name}: combined model, validation (Figure 17)", **model_labels)
+        figures.append(lambda out: fwid.plot_poles(
+            [ident.eigenvalues], ["cycle-averaged part"], path=out / "poles.png",
+            title="combined model: eigenvalues of the cycle-averaged part"))
+    print(flapping_summary(report))
+    return report, figures

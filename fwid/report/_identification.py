@@ -1,0 +1,128 @@
+"""The `report.json` of `fwid identify --model lon|lat` (CONTRACTS section 3) and the blocks
+every pipeline's report shares: parameters, fit information, pooled metrics, mode spread."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..validate._metrics import fit_metrics
+from ..validate._modes import eigenvalues, modes
+
+
+def parameters(fit, names=None) -> dict:
+    """A fit's parameter table (`value`, `std`, ...), the per-flight `@i` terms left out."""
+    table = fit.table()
+    keep = names if names is not None else [k for k in fit.names if "@" not in k]
+    return {k: table[k] for k in keep if k in table}
+
+
+def eig_list(eigs) -> list:
+    return [[float(np.real(e)), float(np.imag(e))] for e in eigs]
+
+
+def fit_info(fit, outputs) -> dict:
+    """The `fit` block of a report: convergence, steps, cost and the noise covariance R."""
+    return {"converged": bool(fit.converged), "passes": int(fit.passes),
+            "gauss_newton_steps": int(fit.steps), "cost": float(fit.cost),
+            "R": np.asarray(fit.R), "outputs": list(outputs)}
+
+
+def _fit_block(ident, fit, estimation, eigs):
+    return {
+        "parameters": parameters(fit),
+        "eigenvalues": eig_list(eigs),
+        "modes": modes(eigs),
+        "metrics": {"estimation": estimation.metrics},
+        "local_parameters": estimation.local_params,
+        "correlation": {"names": list(fit.names), "matrix": np.asarray(fit.corr)},
+        "fit": fit_info(fit, ident.model.outputs),
+    }
+
+
+def pooled_metrics(flight_fits) -> dict:
+    """Metrics over several flights' samples pooled together (outputs and forces)."""
+    if not flight_fits:
+        return {}
+    names = list(flight_fits[0].metrics)
+    z = np.concatenate([np.stack([{**f.measured, **f.forces_measured}[k] for k in names], -1)
+                        for f in flight_fits])
+    y = np.concatenate([np.stack([{**f.simulated, **f.forces_simulated}[k] for k in names], -1)
+                        for f in flight_fits])
+    return fit_metrics(z, y, names)
+
+
+def modes_spread(per_flight_modes: list[list[dict]]) -> dict:
+    """Mean and spread over flights of each mode (Figures 8 and 11): the oscillatory modes'
+    natural frequency and damping, the aperiodic modes' time constants (sorted)."""
+    osc = [[m for m in ms if m["kind"] == "oscillatory"] for ms in per_flight_modes]
+    ape = [sorted(m["tau"] for m in ms if m["kind"] == "aperiodic") for ms in per_flight_modes]
+    out = {"flights": len(per_flight_modes)}
+    if all(osc):
+        wn = np.array([o[0]["wn"] for o in osc])
+        zeta = np.array([o[0]["zeta"] for o in osc])
+        out["oscillatory"] = {"wn_mean": wn.mean(), "wn_std": wn.std(ddof=1) if len(wn) > 1 else 0.0,
+                              "zeta_mean": zeta.mean(),
+                              "zeta_std": zeta.std(ddof=1) if len(zeta) > 1 else 0.0}
+    k = min(len(a) for a in ape)
+    if k:
+        taus = np.array([a[:k] for a in ape])
+        out["aperiodic_tau"] = [{"mean": taus[:, j].mean(), "min": taus[:, j].min(),
+                                 "max": taus[:, j].max()} for j in range(k)]
+    return out
+
+
+def add_validation(report: dict, validation) -> dict:
+    """Add the validation flights' metrics (pooled, and per flight) to a report."""
+    if validation:
+        report["metrics"]["validation"] = pooled_metrics(validation)
+        report["validation_flights"] = [
+            {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
+            for v in validation
+        ]
+    return report
+
+
+def identification_report(ident) -> dict:
+    """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict."""
+    model = ident.model
+    eigs = ident.eigenvalues
+    report = {
+        "model": model.name,
+        "flights": list(ident.flights),
+        "joint": bool(ident.joint),
+        "parameters": {},
+        "eigenvalues": eig_list(eigs),
+        "modes": modes(eigs),
+        "metrics": {"estimation": pooled_metrics(ident.estimation)},
+        "trim_and_vehicle": ident.consts,
+        "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
+    }
+    add_validation(report, ident.validation)
+    if len(ident.fits) == 1:
+        block = _fit_block(ident, ident.fit, ident.estimation[0], eigs)
+        report["parameters"] = block["parameters"]
+        report["correlation"] = block["correlation"]
+        report["fit"] = block["fit"]
+        if ident.joint and len(ident.flights) > 1:
+            report["local_parameters"] = {
+                k: {"value": v["value"], "std": v["std"]}
+                for k, v in ident.fit.table().items() if "@" in k
+            }
+    else:
+        per = []
+        for f, est in zip(ident.fits, ident.estimation):
+            block = _fit_block(ident, f, est, eigenvalues(f.model, ident.consts))
+            per.append({"flight": est.name, **block})
+        report["per_flight"] = per
+        names = [k for k in model.free]
+        vals = np.array([[p["parameters"][k]["value"] for k in names] for p in per])
+        report["parameters"] = {
+            k: {"value": float(vals[:, i].mean()),
+                "std": float(vals[:, i].std(ddof=1)) if len(per) > 1 else None,
+                "spread_over_flights": True}
+            for i, k in enumerate(names)
+        }
+        report["summary"] = ("top-level parameters are the mean over the per-flight fits; "
+                             "their std is the spread (sample std) across flights")
+        report["modes_spread"] = modes_spread([p["modes"] for p in per])
+    return report

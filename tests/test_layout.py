@@ -1,0 +1,103 @@
+"""The package layout shows the pipeline: imports only run downwards, modules stay small,
+and nothing reaches into JAX's private API."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "fwid"
+
+# data -> decompose -> models -> simulate -> estimate -> validate / sensitivity -> identify
+# -> diagnose -> report -> cli. `synth` (the embedded simulator) stands beside `data`, on its
+# own; `_errors` and `_jax_setup` are the ground floor.
+STAGES = ["_errors", "_jax_setup", "data", "decompose", "models", "simulate", "estimate",
+          "validate", "sensitivity", "identify", "diagnose", "report", "cli"]
+RANK = {s: i for i, s in enumerate(STAGES)}
+RANK["synth"] = RANK["data"]
+RANK["_jax_setup"] = RANK["_errors"] = 0
+MAX_LINES = 500
+
+
+def _modules():
+    return sorted(p for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _stage(parts: tuple[str, ...]) -> str:
+    """The stage of a module given by its path parts below `fwid/`."""
+    return parts[0].removesuffix(".py")
+
+
+def _imports(path: Path, package: Path = PACKAGE):
+    """(line, stage) of every fwid module `path` imports, at the top or inside a function."""
+    rel = path.relative_to(package).parts
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:  # relative: climb from the module's package
+                base = list(rel[:-1])[: len(rel) - node.level]
+                target = base + (node.module.split(".") if node.module else [])
+                if not target:  # `from .. import x` at the top of the package: x is a stage
+                    for alias in node.names:
+                        yield node.lineno, alias.name
+                    continue
+                yield node.lineno, target[0].removesuffix(".py")
+            elif node.module and node.module.split(".")[0] == "fwid":
+                parts = node.module.split(".")[1:]
+                if parts:
+                    yield node.lineno, parts[0]
+                else:
+                    for alias in node.names:
+                        yield node.lineno, alias.name
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                parts = alias.name.split(".")
+                if parts[0] == "fwid":
+                    yield node.lineno, parts[1] if len(parts) > 1 else "fwid"
+
+
+def test_every_module_has_a_stage():
+    unknown = {_stage(p.relative_to(PACKAGE).parts) for p in _modules()} - set(RANK) - {"__init__"}
+    assert not unknown, f"modules outside the pipeline's stages: {unknown}; add them to STAGES"
+
+
+def test_imports_only_run_downwards():
+    """No stage imports a later one (the flat API in `fwid/__init__.py` gathers them all)."""
+    upward = []
+    for path in _modules():
+        rel = path.relative_to(PACKAGE).parts
+        if rel == ("__init__.py",):
+            continue
+        own = _stage(rel)
+        for line, target in _imports(path):
+            if target == "fwid":  # `import fwid`: the public API, i.e. everything
+                target = "cli" if own == "cli" else "fwid"
+            if target not in RANK:  # a name from fwid's flat API
+                if own != "cli":
+                    upward.append(f"{'/'.join(rel)}:{line} imports fwid.{target} (the flat API)")
+                continue
+            if target != own and RANK[target] >= RANK[own]:
+                upward.append(f"{'/'.join(rel)}:{line} ({own}) imports {target}")
+    assert not upward, "imports against the pipeline's direction:\n" + "\n".join(upward)
+
+
+def test_the_check_sees_an_upward_import(tmp_path):
+    """The walker above finds relative and absolute upward imports, also inside functions."""
+    pkg = tmp_path / "fwid"
+    (pkg / "validate").mkdir(parents=True)
+    src = ("from ..identify import x\n"
+           "def f():\n    from fwid.report import y\n    from . import _metrics\n")
+    (pkg / "validate" / "_bad.py").write_text(src)
+    found = list(_imports(pkg / "validate" / "_bad.py", pkg))
+    assert [t for _, t in found] == ["identify", "report", "validate"]
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_module_size(path):
+    n = len(path.read_text().splitlines())
+    assert n <= MAX_LINES, f"{path.relative_to(PACKAGE)} has {n} lines (at most {MAX_LINES}): split it by concept"
+
+
+def test_no_private_jax_api():
+    offenders = [str(p.relative_to(PACKAGE)) for p in _modules() if "jax._src" in p.read_text()]
+    assert not offenders, f"modules reaching into JAX's private API: {offenders}"
