@@ -25,4 +25,6 @@ def diagnose(args) -> int:
         write_json(out / "diagnosis.json", diag.to_json())
         print(f"\nfwid: diagnosis.json and gap_map.png in {out}/ "
               f"({time.perf_counter() - t0:.1f} s)")
+    else:
+        print("\nfwid: nothing written (give --out DIR for diagnosis.json and the gap map)")
     return 0

@@ -9,7 +9,9 @@ from pathlib import Path
 
 
 def _stem(name: str) -> str:
-    return Path(name).stem
+    """A figure file stem for a flight: its name (a path below the inputs' common folder)
+    without the suffix, folders joined by `__`, so equal file names in two folders differ."""
+    return str(Path(name).with_suffix("")).replace("\\", "/").replace("/", "__")
 
 
 def identify(args) -> int:
@@ -29,6 +31,8 @@ def identify(args) -> int:
             draw(out)
         fwid.write_json(out / "report.json", report)
         print(f"\nfwid: report and figures in {out}/ ({time.perf_counter() - t0:.1f} s)")
+    else:
+        print("\nfwid: nothing written (give --out DIR for report.json and the figures)")
     return 0
 
 

@@ -1,4 +1,5 @@
-"""The `fwid` command line's arguments (CONTRACTS section 2)."""
+"""The `fwid` command line's arguments (CONTRACTS section 2): every option with its help,
+default and choices."""
 
 from __future__ import annotations
 
@@ -6,39 +7,57 @@ import argparse
 
 
 def parser() -> argparse.ArgumentParser:
+    from fwid import __version__
+    from fwid.synth import EFFECTS, OUT_OF_CATALOGUE
+
+    effects = EFFECTS + OUT_OF_CATALOGUE
+    fmt = argparse.ArgumentDefaultsHelpFormatter
     p = argparse.ArgumentParser(
         prog="fwid",
         description="Identify flapping-wing vehicle dynamics from flight data (Armanini et al.).",
     )
+    p.add_argument("--version", action="version", version=f"fwid {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
-    s = sub.add_parser("simulate", help="write simulated DelFly-like flights (the default data)")
-    s.add_argument("out_dir")
-    s.add_argument("--flights", type=int, default=4)
-    s.add_argument("--axis", choices=("lon", "lat"), default="lon")
-    s.add_argument("--effect", default="none")
-    s.add_argument("--strength", type=float, default=1.0)
-    s.add_argument("--seed", type=int, default=0)
+    s = sub.add_parser("simulate", help="write simulated DelFly-like flights (the default data)",
+                       formatter_class=fmt)
+    s.add_argument("out_dir", help="folder to write the flight CSVs and vehicle.json into")
+    s.add_argument("--flights", type=int, default=4, help="number of flights")
+    s.add_argument("--axis", choices=("lon", "lat"), default="lon",
+                   help="manoeuvre axis: elevator (lon) or rudder (lat)")
+    s.add_argument("--effect", choices=effects, default="none", metavar="EFFECT",
+                   help="unmodelled effect to inject, one of: " + ", ".join(effects))
+    s.add_argument("--strength", type=float, default=1.0,
+                   help="effect strength (1: as strong as the noise on its loads)")
+    s.add_argument("--seed", type=int, default=0, help="random seed")
     s.add_argument("--duration", type=float, default=4.5, help="seconds per flight")
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
 
-    i = sub.add_parser("identify", help="identify a model from flights")
+    i = sub.add_parser("identify", help="identify a model from flights", formatter_class=fmt)
     i.add_argument("data", nargs="+", help="CSV files or folders of them")
-    i.add_argument("--model", choices=("lon", "lat", "flap", "combined"), required=True)
+    i.add_argument("--model", choices=("lon", "lat", "flap", "combined"), required=True,
+                   help="cycle-averaged longitudinal/lateral (Sec. IV), flapping Fourier "
+                   "model (Sec. V) or both combined (Sec. VI)")
     i.add_argument("--joint", action="store_true",
                    help="one parameter set for all flights (each keeps its own biases); with "
                    "--validate, each flight is also fitted alone and the report says which "
                    "validates better on the held-out flights (joint_vs_individual)")
-    i.add_argument("--validate", nargs="+", default=[], metavar="DATA")
-    i.add_argument("--out", default=None, help="folder for report.json and the figures")
+    i.add_argument("--validate", nargs="+", default=[], metavar="DATA",
+                   help="held-out flights (CSV files or folders) to validate on")
+    i.add_argument("--out", default=None,
+                   help="folder for report.json and the figures (without it nothing is written)")
     i.add_argument("--cutoff", type=float, default=5.0, help="cycle-averaged / flapping split [Hz]")
-    i.add_argument("--quiet", action="store_true")
+    i.add_argument("--quiet", action="store_true", help="no progress lines")
 
     d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "
-                                        "how far the held-out error shrinks once it is added")
-    d.add_argument("--train", nargs="+", required=True, metavar="DATA")
-    d.add_argument("--test", nargs="+", required=True, metavar="DATA")
-    d.add_argument("--axis", choices=("lon", "lat"), default="lon")
-    d.add_argument("--out", default=None, help="folder for diagnosis.json and the figure")
-    d.add_argument("--quiet", action="store_true")
+                                        "how far the held-out error shrinks once it is added",
+                       formatter_class=fmt)
+    d.add_argument("--train", nargs="+", required=True, metavar="DATA",
+                   help="flights the models are fitted to (CSV files or folders)")
+    d.add_argument("--test", nargs="+", required=True, metavar="DATA",
+                   help="held-out flights the shrink is measured on")
+    d.add_argument("--axis", choices=("lon", "lat"), default="lon", help="axis to diagnose")
+    d.add_argument("--out", default=None,
+                   help="folder for diagnosis.json and the figure (without it nothing is written)")
+    d.add_argument("--quiet", action="store_true", help="no progress lines")
     return p

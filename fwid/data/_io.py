@@ -10,8 +10,9 @@ import io
 import json
 import math
 import os
+import re
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import jax.numpy as jnp
@@ -305,6 +306,7 @@ def load_flight(
     *,
     vehicle: Vehicle | PathLike | None = None,
     require: Iterable[str] = (),
+    name: str | None = None,
 ) -> Flight:
     """Read one flight: `NAME.csv`, its optional sidecar `NAME.json`, and the `vehicle.json`
     beside it.
@@ -328,6 +330,8 @@ def load_flight(
       `vehicle.json` is looked up beside the CSV (`Flight.vehicle` is `None` if absent).
     - `require`: columns the caller needs (e.g. a model's states and inputs); a missing one
       is an error naming the column and the file.
+    - `name`: the flight's name (default: the file name); error messages name the path as
+      given.
 
     **Returns:** a [`fwid.data.Flight`][].
     """
@@ -337,13 +341,14 @@ def load_flight(
         raise FlightDataError(f"{path}: is a folder, not a flight file; use load_flights")
     if not path.is_file():
         raise FlightDataError(f"{path}: no such file")
-    name = path.name
-    table = _read_csv(path, name, require)
+    name = name or path.name
+    where = str(path)  # messages name the path as given
+    table = _read_csv(path, where, require)
     t = table.pop("t", None)
     columns = table
     if t is None:
-        check_columns(name, list(columns), require)  # raises: names the missing 't'
-    check_flight(name, t, columns, require)
+        check_columns(where, list(columns), require)  # raises: names the missing 't'
+    check_flight(where, t, columns, require)
     n = t.shape[0]
     t = t[0] + np.arange(n) * ((t[-1] - t[0]) / (n - 1))
 
@@ -387,17 +392,32 @@ def _flatten(items) -> list:
     return out
 
 
+def natural_key(name: str) -> list:
+    """Sort key that orders numbers by value: `lon_2` before `lon_10`."""
+    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", name)]
+
+
 def _csv_files(folder: Path) -> list[Path]:
     return sorted(
         (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".csv"),
-        key=lambda p: p.name,
+        key=lambda p: natural_key(p.name),
     )
+
+
+def flight_names(files: Sequence[Path]) -> list[str]:
+    """Names that tell the flights apart: each file's path relative to the folder the files
+    have in common (`lon_0.csv` for one folder, `clean/lon_0.csv` and `demo/lon_0.csv` for
+    two), in `/` form."""
+    parents = [str(f.resolve().parent) for f in files]
+    root = Path(os.path.commonpath(parents)) if parents else Path(".")
+    return [f.resolve().relative_to(root).as_posix() for f in files]
 
 
 def load_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> list[Flight]:
     """Read several flights: each argument is a CSV file or a folder of them.
 
-    A folder stands for all its `*.csv` files, sorted by name (`vehicle.json` and the
+    A folder stands for all its `*.csv` files, sorted by name with numbers by value
+    (`lon_2` before `lon_10`; `vehicle.json` and the
     sidecars `NAME.json` are read alongside, not as flights). Lists of paths are accepted
     too. Each flight is read with [`fwid.data.load_flight`][], with `vehicle.json` looked
     up beside it.
@@ -406,7 +426,9 @@ def load_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> li
     - `*paths_or_folders`: CSV files and/or folders.
     - `require`: columns every flight must have.
 
-    **Returns:** the flights, in the order given (folders expanded in name order).
+    **Returns:** the flights, in the order given (folders expanded in name order), each
+    named by its path relative to the folder all the files share (just the file name when
+    they share one folder), so that equal file names in two folders stay apart.
 
     Raises a [`fwid.FlightDataError`][] when no path is given, a path does not exist, or a
     folder holds no CSV file.
@@ -432,9 +454,9 @@ def load_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> li
             raise FlightDataError(f"{p}: no such file or folder")
     vehicles: dict[Path, Vehicle | None] = {}
     flights = []
-    for f in files:
+    for f, name in zip(files, flight_names(files)):
         key = f.parent.resolve()
         if key not in vehicles:
             vehicles[key] = _vehicle_beside(f)
-        flights.append(load_flight(f, vehicle=vehicles[key], require=require))
+        flights.append(load_flight(f, vehicle=vehicles[key], require=require, name=name))
     return flights

@@ -29,8 +29,17 @@ def _clean(obj):
     return obj
 
 
+def _default_mode() -> int:
+    """The mode a file created by `open()` gets: 0666 less the process's umask (0644 for the
+    usual umask 022)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
 def write_json(path: str | Path, obj) -> Path:
-    """Write `obj` as JSON atomically: to a temporary file beside `path`, then renamed."""
+    """Write `obj` as JSON atomically: to a temporary file beside `path`, then renamed, with
+    the permissions of any file the user writes (not the temporary file's 0600)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     text = json.dumps(_clean(obj), indent=2)
@@ -38,6 +47,7 @@ def write_json(path: str | Path, obj) -> Path:
     try:
         with os.fdopen(fd, "w") as fh:
             fh.write(text + "\n")
+        os.chmod(tmp, _default_mode())
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

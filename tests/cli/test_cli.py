@@ -172,3 +172,61 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "lon_0.csv" in err[0] and "'Z'" in err[0]
     assert (out / "diagnosis.json").read_text() == before
+
+
+def test_report_is_readable_by_others(identified):
+    """report.json gets the mode of any file the user writes (0644 under umask 022), not the
+    atomic write's temporary 0600."""
+    import os
+
+    rc, out = identified
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (out / "report.json").stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_bad_effect_exits_2_and_writes_nothing(tmp_path, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", str(tmp_path / "x"), "--effect", "actuator-lag"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "actuator-lag" in err and "actuator-dynamics" in err  # the choices are listed
+    assert not (tmp_path / "x").exists()
+
+
+def test_help_lists_effects_and_version(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", "--help"])
+    assert info.value.code == 0
+    import re
+
+    text = re.sub(r"-\s+", "-", capsys.readouterr().out)  # argparse wraps at hyphens
+    for effect in ("flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics"):
+        assert effect in text
+    assert "(default: 4)" in text  # defaults shown
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    import fwid
+
+    assert capsys.readouterr().out.strip() == f"fwid {fwid.__version__}"
+
+
+def test_equal_file_names_in_two_folders_give_distinct_figures(flights, tmp_path, capsys):
+    """Two folders with the same file names: distinct flight names in the report and
+    distinct figure files; without --out, a note says nothing was written."""
+    import shutil
+
+    for sub in ("clean", "demo"):
+        (tmp_path / sub).mkdir()
+        for name in ("lon_0.csv", "vehicle.json"):
+            shutil.copy(flights / name, tmp_path / sub / name)
+    out = tmp_path / "out"
+    assert main(["identify", str(tmp_path / "clean"), str(tmp_path / "demo"), "--model", "lon",
+                 "--out", str(out), "--quiet"]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["flights"] == ["clean/lon_0.csv", "demo/lon_0.csv"]
+    assert {p.name for p in out.glob("fit_*.png")} == {"fit_clean__lon_0.png",
+                                                         "fit_demo__lon_0.png"}
+    capsys.readouterr()
+    assert main(["identify", str(tmp_path / "clean"), "--model", "lon", "--quiet"]) == 0
+    assert "nothing written" in capsys.readouterr().out

@@ -1,7 +1,8 @@
 """Every check of `fwid.data` raises a one-line `FlightDataError` that names the file,
 the column / row, and says how to fix it."""
 
-import re
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -138,9 +139,10 @@ def test_binary_file(tmp_path):
 def test_nan_names_column_rows_and_time(tmp_path):
     c = lon_flight()
     c["q"][17:19] = np.nan
-    msg = _error(write_csv(tmp_path / "lon_0.csv", c))
+    path = write_csv(tmp_path / "lon_0.csv", c)
+    msg = _error(path)
     assert msg == (
-        "lon_0.csv: column 'q' has NaN at rows 17, 18 (t=0.085 s); fill or cut these samples"
+        f"{path}: column 'q' has NaN at rows 17, 18 (t=0.085 s); fill or cut these samples"
     )
 
 
@@ -316,10 +318,14 @@ def test_check_frequency_direct():
         check_frequency("x.csv", [12.0, np.inf])
 
 
-def test_messages_name_the_file_not_a_path(tmp_path):
+def test_messages_name_the_path_as_given(tmp_path, monkeypatch):
+    """The file's path as the user gave it, folder included (two folders may hold equal
+    file names)."""
     c = lon_flight()
     c["q"][3] = np.nan
     sub = tmp_path / "deep" / "folder"
     sub.mkdir(parents=True)
-    msg = _error(write_csv(sub / "lon_9.csv", c))
-    assert re.match(r"lon_9\.csv: column 'q'", msg)
+    write_csv(sub / "lon_9.csv", c)
+    monkeypatch.chdir(tmp_path)
+    msg = _error(Path("deep") / "folder" / "lon_9.csv")
+    assert msg.startswith("deep/folder/lon_9.csv: column 'q'"), msg

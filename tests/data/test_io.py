@@ -231,16 +231,31 @@ def test_load_flights_mixed_arguments(tmp_path):
     write_flight(tmp_path / "b", "y.csv", vehicle=False)
     write_flight(tmp_path / "b", "z.csv", vehicle=False)
     flights = load_flights(tmp_path / "b", str(a))
-    assert [f.name for f in flights] == ["y.csv", "z.csv", "x.csv"]
+    # named by the path below the folder the files share
+    assert [f.name for f in flights] == ["b/y.csv", "b/z.csv", "a/x.csv"]
     assert flights[0].vehicle is None and flights[2].vehicle is not None
-    assert [f.name for f in load_flights([a, tmp_path / "b" / "z.csv"])] == ["x.csv", "z.csv"]
+    assert [f.name for f in load_flights([a, tmp_path / "b" / "z.csv"])] == ["a/x.csv", "b/z.csv"]
+
+
+def test_equal_file_names_in_two_folders_stay_apart(tmp_path):
+    write_flight(tmp_path / "clean" / "test", "lon_0.csv")
+    write_flight(tmp_path / "demo", "lon_0.csv")
+    flights = load_flights(tmp_path / "clean" / "test", tmp_path / "demo")
+    assert [f.name for f in flights] == ["clean/test/lon_0.csv", "demo/lon_0.csv"]
+
+
+def test_folders_sort_numbers_by_value(tmp_path):
+    for i in (10, 2, 1):
+        write_flight(tmp_path, f"lon_{i}.csv", vehicle=i == 1)
+    assert [f.name for f in load_flights(tmp_path)] == ["lon_1.csv", "lon_2.csv", "lon_10.csv"]
 
 
 def test_load_flights_require(tmp_path):
     write_flight(tmp_path, "lon_0.csv")
     write_flight(tmp_path, "lon_1.csv", cols={k: v for k, v in lon_flight().items() if k != "q"})
-    with pytest.raises(FlightDataError, match=r"^lon_1\.csv: missing column 'q'"):
+    with pytest.raises(FlightDataError) as info:  # the path as given, folder included
         load_flights(tmp_path, require=("q",))
+    assert str(info.value).startswith(f"{tmp_path / 'lon_1.csv'}: missing column 'q'")
 
 
 def test_load_flights_errors(tmp_path):
