@@ -82,7 +82,9 @@ from .diagnose import (
     diagnose as diagnose,
 )
 from .validate import (
+    StateSpace as StateSpace,
     eigenvalues as eigenvalues,
+    state_space as state_space,
     fit_metrics as fit_metrics,
     modes as modes,
 )

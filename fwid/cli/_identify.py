@@ -30,6 +30,8 @@ def identify(args) -> int:
         for draw in figures:  # drawn once the report is known to be complete
             draw(out)
         fwid.write_json(out / "report.json", report)
+        fwid.report.write_text(out / "parameters.csv",
+                               fwid.report.parameters_csv(report["parameters"]))
         print(f"\nfwid: report and figures in {out}/ ({time.perf_counter() - t0:.1f} s)")
     else:
         print("\nfwid: nothing written (give --out DIR for report.json and the figures)")

@@ -15,12 +15,13 @@ from ..models._delfly import lateral, longitudinal
 from ..models._greybox import GreyBoxModel
 from ..simulate._averaged import averaged
 from ..validate._modes import eigenvalues, modes
+from ..validate._state_space import StateSpace, state_space
 from ._flight_fit import FlightFit, evaluate
 
 MODELS = {"lon": longitudinal, "lat": lateral}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Identification:
     """What [`fwid.identify`][] found: the fit(s), their modes and their metrics."""
 
@@ -43,6 +44,25 @@ class Identification:
     @property
     def modes(self) -> list[dict]:
         return modes(self.eigenvalues)
+
+    def state_space(self, flight: int | None = None) -> StateSpace:
+        """The identified model as `x' = A x + B u`, `y = C x + D u` at the trim, with named
+        states, inputs and outputs ([`fwid.StateSpace`][]: `.to_scipy()`, `.to_control()`).
+        `flight`: the model of that estimation flight's own fit (default: the summary model,
+        the mean of the per-flight estimates or the joint fit)."""
+        model = self.model if flight is None else (
+            self.fits[flight].model if len(self.fits) > 1 else self.model)
+        return state_space(model, self.consts)
+
+    def __repr__(self) -> str:
+        conv = sum(bool(f.converged) for f in self.fits)
+        osc = [m for m in self.modes if m["kind"] == "oscillatory"]
+        mode = (f", oscillatory mode wn={osc[0]['wn']:.3g} rad/s zeta={osc[0]['zeta']:.3g}"
+                if osc else "")
+        return (f"Identification(model={self.model.name!r}, flights={self.flights}, "
+                f"{'joint' if self.joint else 'per-flight'} fit(s): {conv}/{len(self.fits)} "
+                f"converged, {len(self.model.free)} free parameters{mode}, "
+                f"validation flights={[v.name for v in self.validation]})")
 
 
 def get_model(model: str | GreyBoxModel) -> GreyBoxModel:

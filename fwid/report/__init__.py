@@ -22,7 +22,11 @@ from ._identification import (
     pooled_metrics as pooled_metrics,
 )
 from ._joint import joint_report as joint_report, joint_summary as joint_summary
-from ._json import write_json as write_json
+from ._json import (
+    parameters_csv as parameters_csv,
+    write_json as write_json,
+    write_text as write_text,
+)
 from ._spectra import (
     amplitude_spectrum as amplitude_spectrum,
     harmonic_amplitudes as harmonic_amplitudes,

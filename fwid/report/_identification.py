@@ -95,6 +95,7 @@ def identification_report(ident) -> dict:
         "modes": modes(eigs),
         "metrics": {"estimation": pooled_metrics(ident.estimation)},
         "trim_and_vehicle": ident.consts,
+        "state_space": ident.state_space().to_json(),
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
     }
     add_validation(report, ident.validation)

@@ -37,16 +37,16 @@ def _default_mode() -> int:
     return 0o666 & ~umask
 
 
-def write_json(path: str | Path, obj) -> Path:
-    """Write `obj` as JSON atomically: to a temporary file beside `path`, then renamed, with
-    the permissions of any file the user writes (not the temporary file's 0600)."""
+def write_text(path: str | Path, text: str) -> Path:
+    """Write `text` atomically: to a temporary file beside `path`, then renamed (whole or
+    not at all), with the permissions of any file the user writes (not the temporary
+    file's 0600)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(_clean(obj), indent=2)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w") as fh:
-            fh.write(text + "\n")
+            fh.write(text)
         os.chmod(tmp, _default_mode())
         os.replace(tmp, path)
     except BaseException:
@@ -54,3 +54,25 @@ def write_json(path: str | Path, obj) -> Path:
             os.unlink(tmp)
         raise
     return path
+
+
+def write_json(path: str | Path, obj) -> Path:
+    """Write `obj` as JSON atomically ([`write_text`][]); numpy and JAX values become
+    numbers and lists, NaN and infinities `null`."""
+    return write_text(path, json.dumps(_clean(obj), indent=2) + "\n")
+
+
+def parameters_csv(parameters: dict) -> str:
+    """The `parameters.csv` beside `report.json`: one row per parameter with `value`, `std`
+    (Cramer-Rao corrected for coloured residuals, or the spread over flights), `std_cr`
+    (plain Cramer-Rao) and `rel_std_pct` (`100 |std / value|`); empty where not known."""
+
+    def cell(x):
+        return "" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.10g}"
+
+    rows = ["name,value,std,std_cr,rel_std_pct"]
+    for name, p in parameters.items():
+        v, sd = p.get("value"), p.get("std")
+        rel = 100.0 * abs(sd / v) if (v not in (None, 0) and sd is not None) else None
+        rows.append(",".join([name, cell(v), cell(sd), cell(p.get("std_cr")), cell(rel)]))
+    return "\n".join(rows) + "\n"

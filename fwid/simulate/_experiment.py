@@ -82,7 +82,7 @@ def experiment(flight, model, *, x0: str = "first") -> Experiment:
         elif k in ("mass", "Ix", "Iy", "Iz", "Ixz", "g"):
             raise FlightDataError(
                 f"{flight.name}: the {model.name} model needs the vehicle's '{k}' but no "
-                "vehicle.json was found beside the flight; add one (CONTRACTS section 1)"
+                "vehicle.json was found beside the flight; add one (README, \"Your own flights\")"
             )
         else:
             raise FlightDataError(

@@ -16,3 +16,4 @@ from ._harmonics import (
 )
 from ._metrics import fit_metrics as fit_metrics
 from ._modes import eigenvalues as eigenvalues, modes as modes
+from ._state_space import StateSpace as StateSpace, state_space as state_space

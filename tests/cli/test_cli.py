@@ -230,3 +230,25 @@ def test_equal_file_names_in_two_folders_give_distinct_figures(flights, tmp_path
     capsys.readouterr()
     assert main(["identify", str(tmp_path / "clean"), "--model", "lon", "--quiet"]) == 0
     assert "nothing written" in capsys.readouterr().out
+
+
+def test_model_leaves_fwid(identified):
+    """report.json carries A, B, C, D with names; parameters.csv has value, std, std_cr and
+    the relative std beside it, equal to the report's."""
+    import csv
+
+    rc, out = identified
+    report = json.loads((out / "report.json").read_text())
+    ss = report["state_space"]
+    assert ss["states"] == ["q", "u", "w", "theta"] and ss["inputs"] == ["de"]
+    A = np.array(ss["A"])
+    ev = sorted(np.linalg.eigvals(A), key=lambda e: (e.real, e.imag))
+    want = sorted((complex(*e) for e in report["eigenvalues"]), key=lambda e: (e.real, e.imag))
+    np.testing.assert_allclose(ev, want, rtol=1e-8)
+    rows = list(csv.DictReader((out / "parameters.csv").open()))
+    assert [r["name"] for r in rows] == list(report["parameters"])
+    for r in rows:
+        p = report["parameters"][r["name"]]
+        assert float(r["value"]) == pytest.approx(p["value"], rel=1e-9)
+        assert float(r["std"]) == pytest.approx(p["std"], rel=1e-9)
+        assert float(r["rel_std_pct"]) == pytest.approx(100 * abs(p["std"] / p["value"]), rel=1e-6)

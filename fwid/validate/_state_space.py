@@ -1,0 +1,76 @@
+"""The identified model as a linear state-space system `x' = A x + B u`, `y = C x + D u`,
+linearised at the trim (the perturbation models' `x = 0, u = 0`, Eqs. 7-9), with the names
+of its states, inputs and outputs: a model that leaves fwid for scipy or python-control."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..models._greybox import GreyBoxModel
+
+
+@dataclass(frozen=True)
+class StateSpace:
+    """A linear system with named states, inputs and outputs (`A (nx, nx)`, `B (nx, nu)`,
+    `C (ny, nx)`, `D (ny, nu)`, SI units: rad, rad/s, m/s). Bias terms (constant offsets of
+    the aerodynamic model, flight-specific) are not part of the linear system."""
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    states: tuple[str, ...]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+
+    def __repr__(self) -> str:
+        return (f"StateSpace(states={list(self.states)}, inputs={list(self.inputs)}, "
+                f"outputs={list(self.outputs)}, poles={np.round(self.poles(), 4).tolist()})")
+
+    def poles(self) -> np.ndarray:
+        """The eigenvalues of `A`."""
+        return np.linalg.eigvals(self.A)
+
+    def to_scipy(self):
+        """A `scipy.signal.StateSpace` (continuous time)."""
+        from scipy import signal
+
+        return signal.StateSpace(self.A, self.B, self.C, self.D)
+
+    def to_control(self):
+        """A `control.StateSpace` (python-control) with the state, input and output names."""
+        try:
+            import control
+        except ImportError:
+            raise ImportError("to_control needs python-control: pip install control "
+                              "(or pip install 'fwid[control]'); to_scipy() needs nothing more"
+                              ) from None
+        return control.ss(self.A, self.B, self.C, self.D, states=list(self.states),
+                          inputs=list(self.inputs), outputs=list(self.outputs))
+
+    def to_json(self) -> dict:
+        return {"A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(),
+                "D": self.D.tolist(), "states": list(self.states), "inputs": list(self.inputs),
+                "outputs": list(self.outputs),
+                "note": "x' = A x + B u, y = C x + D u: perturbations from the trim, SI units "
+                        "(rad, rad/s, m/s); bias terms left out"}
+
+
+def state_space(model: GreyBoxModel, consts: Mapping[str, float], params=None) -> StateSpace:
+    """Linearise `model` (its `f` and output equation `h`) at the trim, as
+    [`fwid.eigenvalues`][] does: `A = df/dx`, `B = df/du`, `C = dh/dx`, `D = dh/du`."""
+    p = model.params if params is None else {**model.params, **params}
+    c = {k: jnp.asarray(v, dtype=float) for k, v in consts.items()}
+    A, B = model.state_matrices(p, c)
+    x0, u0 = jnp.zeros(len(model.states)), jnp.zeros(len(model.inputs))
+    C, D = jax.jacfwd(lambda x, u: model.h(x, u, p, c), argnums=(0, 1))(x0, u0)
+    return StateSpace(*(np.asarray(M, dtype=float).reshape(shape) for M, shape in (
+        (A, (len(model.states), len(model.states))), (B, (len(model.states), len(model.inputs))),
+        (C, (len(model.outputs), len(model.states))),
+        (D, (len(model.outputs), len(model.inputs))))),
+        states=tuple(model.states), inputs=tuple(model.inputs), outputs=tuple(model.outputs))
