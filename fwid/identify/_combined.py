@@ -29,7 +29,7 @@ from ._flight_fit import FlightFit, evaluate, flight_fit
 from ._progress import say
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CombinedIdentification:
     """What [`fwid.identify_combined`][] found (Section VI).
 
@@ -64,6 +64,13 @@ class CombinedIdentification:
     def eigenvalues(self) -> np.ndarray:
         """The eigenvalues of the cycle-averaged part (the Fourier part adds no dynamics)."""
         return eigenvalues(self.cycle_model or self.model, self.consts)
+
+    def __repr__(self) -> str:
+        return (f"CombinedIdentification(model={self.model.name!r}, flights={self.flights}, "
+                f"cycle-averaged {len((self.cycle_model or self.model).free)} + flapping "
+                f"{len(self.flapping.model.free)} parameters, "
+                f"validation flights={[v.name for v in self.validation]})")
+
 
 
 def _cycle_models(cycle: Identification) -> list[GreyBoxModel]:

@@ -47,7 +47,7 @@ def flapping_peaks(measured: dict, simulated: dict, dt: float, f, n: int, cutoff
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class FlappingIdentification:
     """What [`fwid.identify_flapping_model`][] found (Section V).
 
@@ -77,6 +77,15 @@ class FlappingIdentification:
     @property
     def fit(self) -> FitResult:
         return self.fits[0]
+
+    def __repr__(self) -> str:
+        outputs = list(self.model.outputs)
+        return (f"FlappingIdentification(outputs={outputs}, flights={self.flights}, "
+                f"{'joint' if self.joint else 'per-flight'}, "
+                f"{sum(bool(f.converged) for f in self.fits)}/{len(self.fits)} converged, "
+                f"{len(self.model.free)} coefficients, "
+                f"validation flights={[v.name for v in self.validation]})")
+
 
 
 def per_flight(value, n, what):

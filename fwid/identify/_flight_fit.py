@@ -16,7 +16,7 @@ from ..simulate._simulate import simulate, simulate_forces
 from ..validate._metrics import fit_metrics
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class FlightFit:
     """A model's response on one flight, next to the measurements (Figures 6, 7, 9, 10)."""
 
@@ -29,6 +29,12 @@ class FlightFit:
     forces_simulated: dict[str, np.ndarray]
     metrics: dict[str, dict[str, float]]
     local_params: dict[str, float]
+
+    def __repr__(self) -> str:
+        rms = ", ".join(f"{k} {v['rms_pct']:.1f}%" for k, v in self.metrics.items())
+        return (f"FlightFit({self.name!r}, {len(self.t)} samples, outputs={list(self.measured)}, "
+                f"rms as % of range: {rms})")
+
 
 
 def flight_fit(

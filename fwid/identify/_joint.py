@@ -30,7 +30,7 @@ def _score(metrics: dict, outputs: Sequence[str]) -> float:
     return float(np.mean([metrics[k]["rms_pct"] for k in outputs]))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class JointComparison:
     """What [`fwid.compare_joint`][] found.
 
@@ -51,6 +51,13 @@ class JointComparison:
     individual: Identification
     held_out: list[dict]
     summary: dict
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (f"JointComparison(verdict={s['verdict']!r}, ratio joint/individual "
+                f"{s['ratio']:.3f}, joint better on {s['joint_better_on']} of "
+                f"{s['held_out_flights']} held-out flights)")
+
 
 
 def compare_joint(

@@ -18,7 +18,7 @@ from ._flapping_data import display_inputs, flapping_data, fourier_experiment, o
 from ._flight_fit import FlightFit
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class SteadyVsManoeuvre:
     """The flapping model fitted to a flight's quiet start and to its manoeuvre (Figs. 12, 14).
 
@@ -39,6 +39,13 @@ class SteadyVsManoeuvre:
     fits: tuple[FitResult, FitResult]
     summary: dict[str, dict[str, dict[str, float]]]
     frequency: float
+
+    def __repr__(self) -> str:
+        share = {part: {o: round(v["nonharmonic_pct"], 1) for o, v in d.items()}
+                 for part, d in self.summary.items()}
+        return (f"SteadyVsManoeuvre({self.flight!r}, split at sample {self.split}, "
+                f"f={self.frequency:.2f} Hz, non-harmonic share %: {share})")
+
 
 
 def steady_vs_manoeuvre(

@@ -119,3 +119,16 @@ def test_needs_two_training_flights_and_held_out_ones(folder):
         fwid.compare_joint(flights[:1], "lon", validate=flights[1:])
     with pytest.raises(fwid.InputError, match="held-out"):
         fwid.compare_joint(flights, "lon", validate=[])
+
+
+def test_results_print_as_short_summaries(tmp_path):
+    """Printing a result gives one short line with the headline numbers, not its arrays."""
+    folder = tmp_path / "f"
+    assert main(["simulate", str(folder), "--flights", "2", "--seed", "5"]) == 0
+    flights = fwid.load_flights(folder)
+    ident = fwid.identify(flights[:1], "lon", validate=flights[1:])
+    for obj in (ident, ident.estimation[0], ident.validation[0]):
+        text = repr(obj)
+        assert "\n" not in text and len(text) < 400 and "array" not in text, text
+    assert "1/1 converged" in repr(ident) and "lon_1.csv" in repr(ident)
+    assert "rms as % of range: q" in repr(ident.validation[0])
