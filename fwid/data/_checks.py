@@ -166,7 +166,9 @@ def check_length(name: str, t: Float[ArrayLike, " n"]) -> None:
 
 
 def check_units(name: str, columns: Mapping[str, ArrayLike]) -> None:
-    """Angles, rates and deflections are in radians, not degrees (see `DEGREE_LIMITS`)."""
+    """Angles, rates and deflections are in radians, not degrees (see `DEGREE_LIMITS`); every
+    column that looks like degrees is named in the one message."""
+    found = []
     for col, limit in DEGREE_LIMITS.items():
         if col not in columns:
             continue
@@ -175,15 +177,23 @@ def check_units(name: str, columns: Mapping[str, ArrayLike]) -> None:
             continue
         m = float(np.max(np.abs(x)))
         if m > limit * (1 + 1e-6):
-            rate = col in ("p", "q", "r")
-            fix = "multiply by pi/180"
-            if col == "psi":
-                fix += " (or, for an unwrapped heading in radians, subtract a multiple of 2*pi)"
-            raise FlightDataError(
-                f"{name}: column '{col}' looks like {'deg/s' if rate else 'degrees'} "
-                f"(max |{col}| = {m:.4g}, above the {limit:.3g} {'rad/s' if rate else 'rad'} "
-                f"plausible); fwid expects {'rad/s' if rate else 'radians'}: {fix}"
-            )
+            found.append((col, m, limit))
+    if not found:
+        return
+    fix = "multiply by pi/180"
+    if any(col == "psi" for col, _, _ in found):
+        fix += " (or, for an unwrapped heading in radians, subtract a multiple of 2*pi)"
+    if len(found) == 1:
+        col, m, limit = found[0]
+        rate = col in ("p", "q", "r")
+        raise FlightDataError(
+            f"{name}: column '{col}' looks like {'deg/s' if rate else 'degrees'} "
+            f"(max |{col}| = {m:.4g}, above the {limit:.3g} {'rad/s' if rate else 'rad'} "
+            f"plausible); fwid expects {'rad/s' if rate else 'radians'}: {fix}"
+        )
+    cols = ", ".join(f"'{c}' (max {m:.4g}, plausible {lim:.3g})" for c, m, lim in found)
+    raise FlightDataError(f"{name}: columns {cols} look like degrees or deg/s; fwid expects "
+                          f"radians and rad/s: {fix} in each")
 
 
 def check_frequency(name: str, f: Float[ArrayLike, " n"], t=None) -> None:

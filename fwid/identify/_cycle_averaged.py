@@ -3,6 +3,7 @@ fit (Eqs. 10-11) -> modes and validation."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -81,6 +82,21 @@ def _mean_model(model: GreyBoxModel, fits: Sequence[FitResult]) -> GreyBoxModel:
     return model.with_params(values)
 
 
+def _say_missing_forces(model: GreyBoxModel, flights: Sequence[Flight]) -> None:
+    """A model with a force model fitted to flights without the force columns: the fit still
+    runs on the states, but starts differently and reports no force metrics. Say so."""
+    if not model.force_names:
+        return
+    lacking = [f.name for f in flights if not all(c in f for c in model.force_names)]
+    if lacking:
+        warnings.warn(
+            f"{', '.join(lacking)}: no force/moment columns {' '.join(model.force_names)}; the "
+            f"{model.name} model is fitted to the states alone, from the state-derivative "
+            "regression start instead of the reconstructed forces (Sec. IV.B), and no force "
+            "metrics are reported. Add the columns (README, 'Your own flights') to use them.",
+            UserWarning, stacklevel=3)
+
+
 def identify(
     flights: Sequence[Flight],
     model: str | GreyBoxModel = "lon",
@@ -104,6 +120,7 @@ def identify(
     flights = list(flights)
     if not flights:
         raise InputError("no flights to identify from")
+    _say_missing_forces(model, list(flights) + list(validate))
     exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]
     names = [f.name for f in flights]
     if joint or len(exps) == 1:

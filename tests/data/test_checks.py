@@ -329,3 +329,13 @@ def test_messages_name_the_path_as_given(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     msg = _error(Path("deep") / "folder" / "lon_9.csv")
     assert msg.startswith("deep/folder/lon_9.csv: column 'q'"), msg
+
+
+def test_every_degree_column_named_at_once():
+    t = np.arange(400) * 0.005
+    cols = {"theta": np.full_like(t, 71.3), "q": np.full_like(t, 120.0), "u": np.ones_like(t)}
+    with pytest.raises(FlightDataError) as info:
+        check_flight("lon_0.csv", t, cols)
+    msg = str(info.value)
+    assert msg.startswith("lon_0.csv: columns ") and "'theta' (max 71.3" in msg
+    assert "'q' (max 120" in msg and msg.endswith("multiply by pi/180 in each")

@@ -132,3 +132,19 @@ def test_results_print_as_short_summaries(tmp_path):
         assert "\n" not in text and len(text) < 400 and "array" not in text, text
     assert "1/1 converged" in repr(ident) and "lon_1.csv" in repr(ident)
     assert "rms as % of range: q" in repr(ident.validation[0])
+
+
+def test_missing_force_columns_are_said(tmp_path):
+    """A flight without X, Z, M: the states are fitted, and a warning says what changed."""
+    import csv
+
+    folder = tmp_path / "f"
+    assert main(["simulate", str(folder), "--flights", "1", "--seed", "6"]) == 0
+    rows = list(csv.reader((folder / "lon_0.csv").open()))
+    keep = [i for i, c in enumerate(rows[0]) if c not in ("X", "Y", "Z", "L", "M", "N")]
+    with (folder / "lon_0.csv").open("w", newline="") as fh:
+        csv.writer(fh).writerows([[r[i] for i in keep] for r in rows])
+    with pytest.warns(UserWarning, match=r"lon_0\.csv: no force/moment columns X Z M; the lon "
+                                         r"model is fitted to the states alone"):
+        ident = fwid.identify(fwid.load_flights(folder), "lon")
+    assert ident.fit.converged and "M" not in ident.estimation[0].metrics
