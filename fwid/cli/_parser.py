@@ -33,6 +33,13 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--duration", type=float, default=4.5, help="seconds per flight")
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
 
+    tp = sub.add_parser("template", help="write an example flight folder to overwrite with "
+                        "your own data (columns, units, vehicle.json explained in README.txt)",
+                        formatter_class=fmt)
+    tp.add_argument("out_dir", help="new folder to write the example into")
+    tp.add_argument("--axis", choices=("lon", "lat"), default="lon",
+                    help="longitudinal or lateral example")
+
     i = sub.add_parser("identify", help="identify a model from flights", formatter_class=fmt)
     i.add_argument("data", nargs="+", help="CSV files or folders of them")
     i.add_argument("--model", choices=("lon", "lat", "flap", "combined"), required=True,

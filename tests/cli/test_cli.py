@@ -252,3 +252,18 @@ def test_model_leaves_fwid(identified):
         assert float(r["value"]) == pytest.approx(p["value"], rel=1e-9)
         assert float(r["std"]) == pytest.approx(p["std"], rel=1e-9)
         assert float(r["rel_std_pct"]) == pytest.approx(100 * abs(p["std"] / p["value"]), rel=1e-6)
+
+
+def test_template_folder_identifies(tmp_path, capsys):
+    """`fwid template DIR` writes an example folder that `fwid identify` reads as is; a
+    non-empty folder is refused (exit 2) and left alone."""
+    out = tmp_path / "mine"
+    assert main(["template", str(out)]) == 0
+    assert {"lon_0.csv", "vehicle.json", "README.txt"} <= {p.name for p in out.iterdir()}
+    guide = (out / "README.txt").read_text()
+    assert "RADIANS" in guide and "vehicle.json" in guide
+    assert main(["identify", str(out), "--model", "lon", "--quiet"]) == 0
+    before = sorted(p.name for p in out.iterdir())
+    assert main(["template", str(out)]) == 2
+    assert "not empty" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == before
