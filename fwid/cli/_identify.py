@@ -47,6 +47,7 @@ def _cycle_averaged(args, flights, validate):
                           cutoff=args.cutoff, progress=not args.quiet)
     report = fwid.identification_report(ident)
     print(identification_summary(report))
+    comparison = None
     if args.joint and validate and len(flights) > 1:  # does sharing pay off?
         comparison = fwid.compare_joint(flights, args.model, validate=validate, joint=ident,
                                         cutoff=args.cutoff, progress=not args.quiet)
@@ -61,9 +62,14 @@ def _cycle_averaged(args, flights, validate):
             fwid.plot_flight_fit(ff, path=out / f"validation_{_stem(ff.name)}.png",
                                  title=f"{ff.name}: validation ({args.model})")
         eigs = [fwid.eigenvalues(f.model, ident.consts) for f in ident.fits]
-        labels = (ident.flights if len(ident.fits) > 1
+        labels = (list(ident.flights) if len(ident.fits) > 1
                   else ["joint" if args.joint else ident.flights[0]])
+        if comparison is not None:  # the joint model beside every individual fit
+            ind = comparison.individual
+            eigs += [fwid.eigenvalues(f.model, ind.consts) for f in ind.fits]
+            labels += [f"{n} (alone)" for n in ind.flights]
         fwid.plot_poles(eigs, labels, path=out / "poles.png",
+                        highlight=0 if args.joint else None,
                         title=f"{args.model} model eigenvalues")
 
     return report, [figures]

@@ -5,6 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 
+#: The SI unit of each signal, as in report.json.
+SI_UNITS = {"q": "rad/s", "p": "rad/s", "r": "rad/s", "theta": "rad", "phi": "rad", "psi": "rad",
+            "alpha": "rad", "beta": "rad", "u": "m/s", "w": "m/s", "v": "m/s", "de": "rad",
+            "dr": "rad", "X": "N", "Y": "N", "Z": "N", "L": "N m", "M": "N m", "N": "N m"}
+
+
 def _chunks(seq, n):
     k = int(np.ceil(len(seq) / n))
     return [seq[i * k:(i + 1) * k] for i in range(n)]
@@ -32,11 +38,13 @@ def parameter_table(params: dict, *, columns: int = 3) -> str:
 
 
 def metrics_table(metrics: dict, title: str = "") -> str:
-    """Table 2's layout: output correlation, R^2, RMS and RMS as % of range, per output."""
+    """Table 2's layout: output correlation, R^2, RMS (in the output's SI unit) and RMS as %
+    of the output's measured range, per output."""
     lines = [title] if title else []
-    lines.append(f"{'output':<8}{'corr':>7}{'R2':>8}{'RMS':>11}{'RMS %':>8}")
+    lines.append(f"{'output':<8}{'corr':>7}{'R2':>8}{'RMS':>11} {'unit':<6}{'% range':>8}")
     for k, m in metrics.items():
-        lines.append(f"{k:<8}{m['corr']:>7.2f}{m['r2']:>8.2f}{m['rms']:>11.3e}{m['rms_pct']:>8.2f}")
+        lines.append(f"{k:<8}{m['corr']:>7.2f}{m['r2']:>8.2f}{m['rms']:>11.3e} "
+                     f"{SI_UNITS.get(k, ''):<6}{m['rms_pct']:>8.2f}")
     return "\n".join(lines)
 
 
