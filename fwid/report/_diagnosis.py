@@ -13,12 +13,29 @@ from ..diagnose._signals import AXIS_LOADS
 _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
 
 
+def in_band_shrink(c: dict) -> float | None:
+    """The drop (%) of the held-out RMS within the effect's own band, over its affected loads
+    (`test_rms_in_band`): the headline shrink, where the effect acts."""
+    band = c.get("test_rms_in_band", {})
+    pairs = [(band[ld]["before"], band[ld]["after"]) for ld in c["affected"] if ld in band]
+    pairs = [(b, a) for b, a in pairs if b > 0]
+    if not pairs:
+        return None
+    return 100.0 * (1.0 - float(np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
+
+
+def _shrink_text(c: dict) -> str:
+    band = in_band_shrink(c)
+    overall = f"{c['shrink_pct']:.1f} % overall"
+    return f"{band:.1f} % in its band, {overall}" if band is not None else overall
+
+
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
     # the loads to talk about: those the verdict affects, else the manoeuvre axis's own
-    focus = (d.candidate(d.verdict)["affected"] if d.verdict != "none"
-             else [ld for ld in loc["by_output"] if ld in AXIS_LOADS[d.axis]])
+    own = [ld for ld in loc["by_output"] if ld in AXIS_LOADS[d.axis]]
+    focus = d.candidate(d.verdict)["affected"] if d.verdict != "none" else own
     worst = max(focus or loc["by_output"], key=lambda ld: loc["by_output"][ld]["unexplained_pct"])
     bands = loc["by_band"][worst]
     top_band = max(bands, key=bands.get)
@@ -46,14 +63,16 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append(f"  VERDICT: {d.verdict}"
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f": held-out RMS of {'/'.join(c['affected'])} shrinks "
-                     f"{c['shrink_pct']:.1f} % ({change})")
-    lines.append(f"  {'candidate':<18} {'signif.':>7} {'shrink %':>8}  evidence (CV gain %, t)")
+                     f"{_shrink_text(c)} ({change})")
+    lines.append(f"  {'candidate':<18} {'signif.':>7} {'in-band shrink %':>16} {'overall %':>9}"
+                 "  evidence (CV gain %, t)")
     for c in d.candidates:
         ev = c["evidence"]
         best = sorted(ev, key=lambda ld: -ev[ld]["t"])[:2]
+        band = in_band_shrink(c)
         lines.append(
             f"  {c['effect']:<18} {('yes' if c['significant'] else 'no'):>7} "
-            f"{c['shrink_pct']:8.1f}  "
+            f"{(f'{band:.1f}' if band is not None else '-'):>16} {c['shrink_pct']:9.1f}  "
             + ", ".join(f"{ld}: {ev[ld]['cv_gain_pct']:.1f} %, t={ev[ld]['t']:.1f}" for ld in best)
         )
     return "\n".join(lines)
@@ -64,7 +83,7 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
     time; mean square over the bins of the most telling state) and what the verdict (or the
     best candidate) removes, per load."""
     loc = d.localisation
-    loads = list(loc["by_output"])
+    loads = [ld for ld in loc["by_output"] if ld in AXIS_LOADS[d.axis]] or list(loc["by_output"])
     fig = Figure(figsize=(12, 7.5), layout="constrained")
     ax = fig.subplots(2, 2)
 
@@ -100,7 +119,8 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
     ax[1, 0].axhline(1.0, color="k", lw=0.8)
     ax[1, 0].set_xlabel("quantile bin of the state (low to high)")
     ax[1, 0].set_ylabel("mean square / overall")
-    ax[1, 0].set_title("held-out error over the flight state (most telling state per load)")
+    ax[1, 0].set_title("held-out error over the flight state\n(most telling state per load)",
+                       fontsize=9)
     ax[1, 0].legend(fontsize=8)
 
     c = d.candidate(d.verdict) if d.verdict != "none" else d.candidates[0]
@@ -111,7 +131,7 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
     ax[1, 1].set_xticks(x, loads)
     ax[1, 1].set_ylabel("held-out RMS after / before")
     ax[1, 1].set_title(f"{'verdict' if d.verdict != 'none' else 'best candidate (not significant)'}"
-                       f": {c['effect']} (shrink {c['shrink_pct']:.1f} %)")
+                       f": {c['effect']}\nheld-out RMS shrinks {_shrink_text(c)}", fontsize=9)
     ax[1, 1].set_ylim(0, 1.1)
     fig.suptitle(f"fwid diagnose ({d.axis}): verdict {d.verdict}")
     if path is not None:

@@ -123,3 +123,22 @@ def _drop(flight, col):
 
     cols = {k: v for k, v in flight.columns.items() if k != col}
     return eqx.tree_at(lambda f: f.columns, flight, cols)
+
+
+def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
+    """The terminal quotes the in-band shrink as the headline next to the overall one; the
+    gap map shows the axis's own loads only."""
+    from fwid.report import diagnosis_summary, plot_gap_map
+    from fwid.report._diagnosis import in_band_shrink
+
+    d = _diagnose(*effect_flights("flap-coupling", seed=1))
+    c = d.candidate(d.verdict)
+    band = in_band_shrink(c)
+    pairs = [(c["test_rms_in_band"][ld]["before"], c["test_rms_in_band"][ld]["after"])
+             for ld in c["affected"]]
+    assert band == pytest.approx(100 * (1 - np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
+    text = diagnosis_summary(d)
+    assert f"{band:.1f} % in its band, {c['shrink_pct']:.1f} % overall" in text
+    fig = plot_gap_map(d)
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    assert [lab.split()[0] for lab in labels] == ["X", "Z", "M"]
