@@ -1,6 +1,11 @@
 """The notebooks run top to bottom (executed with nbclient in a fresh kernel of this virtual
-environment, from a temporary working folder, as a user would) and show what they promise."""
+environment, from a temporary working folder, as a user would) and show what they promise.
 
+The notebooks are committed with their outputs, figures included, so that a reader browsing
+them sees what they show: `FWID_SAVE_NOTEBOOKS=1 pytest tests/test_notebooks.py` refreshes
+them."""
+
+import os
 from pathlib import Path
 
 import nbformat
@@ -16,6 +21,8 @@ def _execute(name, tmp_path):
     client = NotebookClient(nb, timeout=600, kernel_name="python3",
                             resources={"metadata": {"path": str(tmp_path)}})
     client.execute()
+    if os.environ.get("FWID_SAVE_NOTEBOOKS"):  # refresh the outputs committed for readers
+        nbformat.write(nb, NOTEBOOKS / name)
     outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
     errors = [f"{o['ename']}: {o['evalue']}" for o in outputs if o.get("output_type") == "error"]
     assert not errors, errors
