@@ -6,3 +6,4 @@ from ._uncertainty import (
     correlation as correlation,
 )
 from ._local import refit_local_affine as refit_local_affine
+from ._warnings import fit_warnings as fit_warnings

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 
@@ -15,6 +16,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
+from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments
 from ..simulate._simulate import simulate, simulate_sensitivities
 from ._devices import device_count, flight_mesh, padded_count
@@ -24,6 +26,7 @@ from ._gauss_newton import (
     jacobian_once,
 )
 from ._start import least_squares_start
+from ._warnings import fit_warnings, issue
 from ._uncertainty import (
     coloured_residual_middle,
     correlation,
@@ -58,6 +61,9 @@ class FitResult(eqx.Module):
       steps taken (evaluations, the start and any halved steps included).
     - `converged`: whether the cost and the parameters settled within tolerance.
     - `start`: the least-squares start values of the free parameters.
+    - `warnings`: what should not be trusted about this fit (not converged, R
+      ill-conditioned, parameters correlated beyond 0.98, not finite), one sentence each;
+      [`fwid.fit`][] also issues each as a [`fwid.FitWarning`][].
     """
 
     model: GreyBoxModel
@@ -74,6 +80,7 @@ class FitResult(eqx.Module):
     steps: Int[Array, ""]
     converged: Bool[Array, ""]
     start: Float[Array, " p"]
+    warnings: tuple[str, ...] = eqx.field(static=True, default=())
 
     @property
     def params(self) -> dict:
@@ -271,8 +278,10 @@ def fit(
 
     **Returns:** a [`fwid.FitResult`][].
 
-    **Raises:** [`fwid.ExcitationError`][] when the data cannot identify a parameter,
-    [`fwid.FitDivergedError`][] when the cost cannot be made finite.
+    **Raises:** [`fwid.InputError`][] when an experiment's time axis is not uniform or its
+    `u`, `z`, `x0` do not match the model's inputs, outputs and states (or `x0` is missing
+    where the outputs are not the states), [`fwid.ExcitationError`][] when the data cannot
+    identify a parameter, [`fwid.FitDivergedError`][] when the cost cannot be made finite.
     """
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
@@ -289,7 +298,8 @@ def fit(
         max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
         n_local_batch=n_local,
     )
-    result = _result(model, start_model, theta0, out, names, n_local)
+    result = _result(model, start_model, theta0, out, names, n_local, max_steps)
+    issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
         print(f"fwid: {model.name} fit {state} in {int(result.steps)} Gauss-Newton steps "
@@ -302,9 +312,10 @@ def _prepare(model, exps, names, start, n_local):
     """Checks and start values: the start model and the initial free vector."""
     if not model.free:
         raise ValueError(f"model {model.name!r} has no free parameters to estimate")
-    for e in exps:
+    for e, name in zip(exps, names):
         if e.t.dtype != jnp.float64:
             raise TypeError("fwid.fit needs float64 arrays: enable jax_enable_x64 (import fwid)")
+        check_experiment(model, e, name)
     _check_excitation(model, exps, names)
     if isinstance(start, GreyBoxModel):
         start_model = model.with_params(start.params)
@@ -323,7 +334,7 @@ def _prepare(model, exps, names, start, n_local):
     return start_model, theta0
 
 
-def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
+def _result(model, start_model, theta0, out, names, n_local, max_steps=None) -> FitResult:
     """Check the estimator's raw output and wrap it in a [`fwid.FitResult`][]."""
     glob, loc, free_names = _free_layout(model, n_local)
     if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
@@ -333,7 +344,7 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
             "start values (`start=model.with_params(...)`)"
         )
     _check_information(out, free_names, names)
-    return FitResult(
+    result = FitResult(
         model=eqx.tree_at(lambda m: m.params, start_model, dict(out["params"])),
         names=tuple(free_names),
         theta=out["theta"],
@@ -349,6 +360,8 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
         converged=out["converged"],
         start=theta0,
     )
+    found = fit_warnings(result, names, max_steps, information=out["M"])
+    return dataclasses.replace(result, warnings=tuple(found))
 
 
 @eqx.filter_jit
@@ -418,8 +431,9 @@ def fit_each(
     # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
     # arrays flight by flight costs more than the fits of a large batch).
     per_flight = jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])
-    results = [_result(model, sm, th, o, [n], 0)
+    results = [_result(model, sm, th, o, [n], 0, max_steps)
                for (sm, th), o, n in zip(starts, per_flight, names)]
+    issue([w for r in results for w in r.warnings])
     if progress:
         ok = sum(bool(r.converged) for r in results)
         print(f"fwid: {ok}/{len(results)} fits converged, {time.perf_counter() - t0:.1f} s",
