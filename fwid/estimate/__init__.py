@@ -1,5 +1,6 @@
 from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
-from ._output_error import FitResult as FitResult, fit as fit, fit_each as fit_each
+from ._output_error import FitResult as FitResult, fit as fit
+from ._each import fit_each as fit_each
 from ._start import least_squares_start as least_squares_start
 from ._uncertainty import (
     coloured_residual_middle as coloured_residual_middle,

@@ -24,7 +24,8 @@ def fit_info(fit, outputs) -> dict:
     """The `fit` block of a report: convergence, steps, cost and the noise covariance R."""
     return {"converged": bool(fit.converged), "passes": int(fit.passes),
             "gauss_newton_steps": int(fit.steps), "cost": float(fit.cost),
-            "R": np.asarray(fit.R), "outputs": list(outputs),
+            "R": np.asarray(fit.R), "noise": getattr(fit, "noise", "full"),
+            "outputs": list(outputs),
             "warnings": list(getattr(fit, "warnings", ()))}
 
 

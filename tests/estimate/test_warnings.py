@@ -13,18 +13,35 @@ T = np.arange(400) * 0.01
 U = np.sign(np.sin(2 * T))
 
 
-def _lag(params=None, h=None, outputs=None, name="lag"):
+def _sum_lag():
+    """`a1` and `a2` only enter as their sum."""
     def f(x, u, p, c):
         return jnp.stack([-(p["a1"] + p["a2"]) * x[0] + p["b"] * u[0]])
 
-    return fwid.GreyBoxModel(f, states=("x",), inputs=("u",), h=h, outputs=outputs, name=name,
-                             params=params or dict(a1=1.0, a2=0.5, b=1.0))
+    return fwid.GreyBoxModel(f, states=("x",), inputs=("u",), name="lag",
+                             params=dict(a1=1.0, a2=0.5, b=1.0))
 
 
 def _data(model, ny=1, noise=0.01, seed=0):
     _, ys = fwid.simulate(model, fwid.Experiment(T, U, np.zeros((T.size, ny)), x0=np.zeros(1)))
     rng = np.random.default_rng(seed)
     return np.asarray(ys) + noise * rng.standard_normal((T.size, ny))
+
+
+def _simple(h=None, outputs=None, name="lag"):
+    return fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
+                             states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0),
+                             h=h, outputs=outputs, name=name)
+
+
+def _twice():
+    """The state measured twice, the second copy with almost no noise of its own: R nearly
+    singular."""
+    model = _simple(h=lambda x, u, p, c: jnp.stack([x[0], x[0]]), outputs=("y1", "y2"),
+                    name="twice")
+    z = _data(model.with_params(a=3.0, b=2.0), ny=2)[:, :1]
+    rng = np.random.default_rng(1)
+    return model, np.concatenate([z, z + 1e-7 * rng.standard_normal(z.shape)], axis=1)
 
 
 def _fit(model, z, **kw):
@@ -39,8 +56,7 @@ def test_fitwarning_is_a_userwarning_users_can_filter():
 
 
 def test_not_converged_warns_and_is_in_the_result():
-    model = fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
-                              states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0), name="lag")
+    model = _simple()
     z = _data(model.with_params(a=3.0, b=2.0))
     r, caught = _fit(model, z, start="model", max_steps=1)
     assert not bool(r.converged)
@@ -50,14 +66,13 @@ def test_not_converged_warns_and_is_in_the_result():
 
 
 def test_a_good_fit_has_no_warnings():
-    model = fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
-                              states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0), name="lag")
+    model = _simple()
     r, caught = _fit(model, _data(model.with_params(a=3.0, b=2.0)), start="model")
     assert bool(r.converged) and r.warnings == () and caught == []
 
 
 def test_parameters_entering_as_a_sum_are_named():
-    model = _lag()
+    model = _sum_lag()
     r, caught = _fit(model, _data(model.with_params(a1=1.2, a2=0.8)), start="model")
     found = [m for m in caught if "nearly unidentifiable" in m]
     assert found and "a1 and a2" in found[0] and "correlated beyond 0.98" in found[0]
@@ -76,14 +91,9 @@ def test_nearly_correlated_pair_is_named_with_its_correlation():
 
 
 def test_ill_conditioned_R_says_the_condition_number():
-    model = fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
-                              states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0),
-                              h=lambda x, u, p, c: jnp.stack([x[0], x[0]]),
-                              outputs=("y1", "y2"), name="twice")
-    z = _data(model.with_params(a=3.0, b=2.0), ny=2)[:, :1]
-    rng = np.random.default_rng(1)
-    z2 = np.concatenate([z, z + 1e-7 * rng.standard_normal(z.shape)], axis=1)
-    r, caught = _fit(model, z2, start="model")
+    model, z2 = _twice()
+    r, caught = _fit(model, z2, start="model", noise="full")
+    assert r.noise == "full"
     found = [m for m in caught if "ill-conditioned" in m]
     assert found and "f1: the twice fit: the noise covariance R is ill-conditioned " \
                      "(condition number " in found[0]
@@ -91,8 +101,7 @@ def test_ill_conditioned_R_says_the_condition_number():
 
 
 def test_non_finite_estimate_is_reported():
-    model = fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
-                              states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0), name="lag")
+    model = _simple()
     r, _ = _fit(model, _data(model.with_params(a=3.0, b=2.0)), start="model")
     bad = r.__class__(**{**{k: getattr(r, k) for k in r.__dataclass_fields__},
                          "theta": jnp.array([jnp.nan, 1.0]), "warnings": ()})
@@ -103,10 +112,26 @@ def test_non_finite_estimate_is_reported():
 
 
 def test_fit_each_warns_per_flight():
-    model = fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
-                              states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0), name="lag")
+    model = _simple()
     exps = [fwid.Experiment(T, U, _data(model.with_params(a=3.0, b=2.0), seed=s), x0=np.zeros(1))
             for s in (0, 1)]
     with pytest.warns(fwid.FitWarning, match="g2: the lag fit did not converge"):
         rs = fwid.fit_each(model, exps, names=["g1", "g2"], start="model", max_steps=1)
     assert all(r.warnings for r in rs)
+
+
+def test_auto_noise_falls_back_to_a_diagonal_R_and_says_so():
+    model, z2 = _twice()
+    r, caught = _fit(model, z2, start="model")  # noise="auto", the default
+    assert r.noise == "diagonal" and bool(r.converged)
+    assert np.count_nonzero(np.asarray(r.R) - np.diag(np.diag(np.asarray(r.R)))) == 0
+    note = [m for m in caught if "with a full R ended with an ill-conditioned R" in m]
+    assert note and "estimates are those of a diagonal R" in note[0]
+    assert abs(float(r.params["a"]) - 3.0) < 0.05
+    exps = [fwid.Experiment(T, U, z2, x0=np.zeros(1))] * 2
+    with pytest.warns(fwid.FitWarning, match="g1: the twice fit with a full R"):
+        each = fwid.fit_each(model, exps, names=["g1", "g2"], start="model")
+    assert [e.noise for e in each] == ["diagonal", "diagonal"]
+    assert fwid.fit(model, exps[0], start="model", noise="diagonal").noise == "diagonal"
+    with pytest.raises(ValueError, match="noise must be one of 'auto', 'full', 'diagonal'"):
+        fwid.fit(model, exps[0], noise="fool")
