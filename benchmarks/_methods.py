@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import fwid
+from fwid.estimate import _each
 from fwid.estimate import _output_error as _oe
 from fwid.simulate import stack_experiments
 
@@ -145,8 +146,8 @@ class Bench:
                 nmax = max(e.n for e in self.exps[:n])
                 stacked = jax.tree_util.tree_map(
                     lambda *a: jnp.stack(a), *[stack_experiments([e], n=nmax) for e in self.exps[:n]])
-                lowered = _oe._fit_each_batched.lower(self.model, theta0s, stacked,
-                                                      n_local_batch=0, **self.fit_defaults)
+                lowered = _each._fit_each_batched.lower(self.model, theta0s, stacked,
+                                                        n_local_batch=0, **self.fit_defaults)
                 return xla_memory(lowered.lowered.compile())
             return xla_memory(self.fwid_batched_fn().lower(*self.fwid_batched_args(n)).compile())
         except Exception:

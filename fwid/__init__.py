@@ -21,6 +21,7 @@ _cpu_devices()
 from ._errors import (
     ExcitationError as ExcitationError,
     FitDivergedError as FitDivergedError,
+    FitWarning as FitWarning,
     FlightDataError as FlightDataError,
     FwidError as FwidError,
     InputError as InputError,

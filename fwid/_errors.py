@@ -23,3 +23,9 @@ class ExcitationError(InputError):
 
 class FitDivergedError(FwidError, RuntimeError):
     """The estimator failed to converge (the simulation blew up or the cost did not decrease)."""
+
+
+class FitWarning(UserWarning):
+    """A fit that finished but should not be trusted as it is: not converged, R
+    ill-conditioned, parameters nearly unidentifiable, or not finite. Filter it with
+    `warnings.filterwarnings("ignore", category=fwid.FitWarning)`."""

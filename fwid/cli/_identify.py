@@ -4,6 +4,7 @@ combined model: Figures 12-17)."""
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -35,6 +36,19 @@ def identify(args) -> int:
         print(f"\nfwid: report and figures in {out}/ ({time.perf_counter() - t0:.1f} s)")
     else:
         print("\nfwid: nothing written (give --out DIR for report.json and the figures)")
+    return _exit_code(report)
+
+
+def _exit_code(report: dict) -> int:
+    """1, with one line on stderr naming the flights, when no fit converged; else 0."""
+    from fwid.report import converged_flags
+
+    flags = converged_flags(report)
+    if flags and not any(flags):
+        print(f"fwid: error: no fit converged (flights: {', '.join(report['flights'])}); "
+              "see the warnings above" + (" and in report.json" if report.get("warnings")
+                                           is not None else ""), file=sys.stderr)
+        return 1
     return 0
 
 

@@ -1,8 +1,10 @@
 from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
-from ._output_error import FitResult as FitResult, fit as fit, fit_each as fit_each
+from ._output_error import FitResult as FitResult, fit as fit
+from ._each import fit_each as fit_each
 from ._start import least_squares_start as least_squares_start
 from ._uncertainty import (
     coloured_residual_middle as coloured_residual_middle,
     correlation as correlation,
 )
 from ._local import refit_local_affine as refit_local_affine
+from ._warnings import fit_warnings as fit_warnings

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 
@@ -10,19 +11,19 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
-from jax.sharding import PartitionSpec
 from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
+from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments
 from ..simulate._simulate import simulate, simulate_sensitivities
-from ._devices import device_count, flight_mesh, padded_count
 from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
     jacobian_once,
 )
+from ._noise import check_noise, choose, full_r_trouble
 from ._start import least_squares_start
 from ._uncertainty import (
     coloured_residual_middle,
@@ -31,6 +32,7 @@ from ._uncertainty import (
     covariance,
     fisher_information,
 )
+from ._warnings import fit_warnings, issue
 
 # The Bartlett lag window of the coloured-residual bounds spans this many residual
 # correlation lengths (see `benchmarks/calibration.py` for how it was chosen).
@@ -58,6 +60,11 @@ class FitResult(eqx.Module):
       steps taken (evaluations, the start and any halved steps included).
     - `converged`: whether the cost and the parameters settled within tolerance.
     - `start`: the least-squares start values of the free parameters.
+    - `warnings`: what should not be trusted about this fit (not converged, R
+      ill-conditioned, parameters correlated beyond 0.98, not finite), one sentence each;
+      [`fwid.fit`][] also issues each as a [`fwid.FitWarning`][].
+    - `noise`: the R the estimates belong to, `"full"` or `"diagonal"` (with `noise="auto"`
+      a diagonal R replaces a full one that failed, see `fwid.estimate._noise`).
     """
 
     model: GreyBoxModel
@@ -74,6 +81,8 @@ class FitResult(eqx.Module):
     steps: Int[Array, ""]
     converged: Bool[Array, ""]
     start: Float[Array, " p"]
+    warnings: tuple[str, ...] = eqx.field(static=True, default=())
+    noise: str = eqx.field(static=True, default="full")
 
     @property
     def params(self) -> dict:
@@ -235,7 +244,7 @@ def fit(
     *,
     names: Sequence[str] | None = None,
     start: str | GreyBoxModel = "least-squares",
-    noise: str = "full",
+    noise: str = "auto",
     max_passes: int = 12,
     max_steps: int = 60,
     rtol: float = 1e-10,
@@ -259,7 +268,9 @@ def fit(
     - `names`: the experiments' names, for messages (default `exp0`, `exp1`, ...).
     - `start`: `"least-squares"` (equation error, as the paper), `"model"` (the model's
       current values), or a model whose values to start from.
-    - `noise`: `"full"` R (Eq. 11) or `"diagonal"` (uncorrelated output noise).
+    - `noise`: `"full"` R (Eq. 11), `"diagonal"` (uncorrelated output noise), or `"auto"`:
+      a full R, replaced by a diagonal one when the full-R fit does not converge, is not
+      finite or ends with an ill-conditioned R (`FitResult.noise` says which was used).
     - `max_steps`: Gauss-Newton steps (each relaxes R). `max_passes` is accepted for
       compatibility and unused (R used to be relaxed between whole Gauss-Newton solves).
     - `rtol`: stop when the next step is below `1e-9 + rtol |theta_i|` for every parameter,
@@ -271,9 +282,12 @@ def fit(
 
     **Returns:** a [`fwid.FitResult`][].
 
-    **Raises:** [`fwid.ExcitationError`][] when the data cannot identify a parameter,
-    [`fwid.FitDivergedError`][] when the cost cannot be made finite.
+    **Raises:** [`fwid.InputError`][] when an experiment's time axis is not uniform or its
+    `u`, `z`, `x0` do not match the model's inputs, outputs and states (or `x0` is missing
+    where the outputs are not the states), [`fwid.ExcitationError`][] when the data cannot
+    identify a parameter, [`fwid.FitDivergedError`][] when the cost cannot be made finite.
     """
+    check_noise(noise)
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
@@ -284,12 +298,28 @@ def fit(
               f"{', '.join(names)} ...", flush=True)
     fn, data = (_fit_one_jit, exps[0]) if len(exps) == 1 else (_fit_batch_jit,
                                                                stack_experiments(exps))
-    out = fn(
-        start_model, theta0, data, diagonal=(noise == "diagonal"),
-        max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
-        n_local_batch=n_local,
-    )
-    result = _result(model, start_model, theta0, out, names, n_local)
+
+    def run(diagonal: bool) -> FitResult:
+        out = fn(start_model, theta0, data, diagonal=diagonal, max_passes=max_passes,
+                 max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol, n_local_batch=n_local)
+        return _result(model, start_model, theta0, out, names, n_local, max_steps,
+                       "diagonal" if diagonal else "full")
+
+    if noise != "auto":
+        result = run(noise == "diagonal")
+    else:
+        try:
+            result = run(False)
+            reason = full_r_trouble(result)
+        except FitDivergedError:
+            result, reason = None, "diverged"
+        if reason is not None:
+            if progress:
+                print(f"fwid: the fit with a full R {reason}: refitting with a diagonal R",
+                      flush=True)
+            result = (run(True) if result is None
+                      else choose(result, run(True), reason, names))
+    issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
         print(f"fwid: {model.name} fit {state} in {int(result.steps)} Gauss-Newton steps "
@@ -302,9 +332,10 @@ def _prepare(model, exps, names, start, n_local):
     """Checks and start values: the start model and the initial free vector."""
     if not model.free:
         raise ValueError(f"model {model.name!r} has no free parameters to estimate")
-    for e in exps:
+    for e, name in zip(exps, names):
         if e.t.dtype != jnp.float64:
             raise TypeError("fwid.fit needs float64 arrays: enable jax_enable_x64 (import fwid)")
+        check_experiment(model, e, name)
     _check_excitation(model, exps, names)
     if isinstance(start, GreyBoxModel):
         start_model = model.with_params(start.params)
@@ -323,7 +354,8 @@ def _prepare(model, exps, names, start, n_local):
     return start_model, theta0
 
 
-def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
+def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
+            noise="full") -> FitResult:
     """Check the estimator's raw output and wrap it in a [`fwid.FitResult`][]."""
     glob, loc, free_names = _free_layout(model, n_local)
     if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
@@ -333,7 +365,7 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
             "start values (`start=model.with_params(...)`)"
         )
     _check_information(out, free_names, names)
-    return FitResult(
+    result = FitResult(
         model=eqx.tree_at(lambda m: m.params, start_model, dict(out["params"])),
         names=tuple(free_names),
         theta=out["theta"],
@@ -348,80 +380,7 @@ def _result(model, start_model, theta0, out, names, n_local) -> FitResult:
         steps=out["steps"],
         converged=out["converged"],
         start=theta0,
+        noise=noise,
     )
-
-
-@eqx.filter_jit
-def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
-    """[`_fit_batch`][] on each flight alone: `vmap` over the flights. With a device `mesh`
-    (axis `"flights"`, see [`flight_mesh`][]) each device runs its share of the flights as
-    its own `vmap` (`shard_map`: the fits are independent, the devices never wait for one
-    another)."""
-    if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
-        out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
-        return jax.tree.map(lambda a: a[None], out)
-
-    def each(th, b):
-        return jax.vmap(lambda th1, b1: _fit_batch(model, th1, b1, **kw))(th, b)
-
-    if mesh is None:
-        return each(theta0s, batches)
-    spec = PartitionSpec("flights")
-    return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
-                         check_vma=False)(theta0s, batches)
-
-
-def fit_each(
-    model: GreyBoxModel,
-    experiments: Sequence[Experiment],
-    *,
-    names: Sequence[str] | None = None,
-    start: str | GreyBoxModel = "least-squares",
-    noise: str = "full",
-    max_passes: int = 12,
-    max_steps: int = 60,
-    rtol: float = 1e-10,
-    cost_rtol: float = 1e-10,
-    progress: bool = False,
-) -> list[FitResult]:
-    """Fit `model` to each experiment on its own, all in one vmapped call.
-
-    The flights are padded to a common length and masked (a padded sample never enters a
-    cost), so one compiled estimator serves every flight and the whole batch runs as a single
-    XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
-    on each flight alone. Arguments as for [`fwid.fit`][].
-
-    **Returns:** one [`fwid.FitResult`][] per experiment, in order.
-    """
-    exps = list(experiments)
-    names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
-    t0 = time.perf_counter()
-    if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
-        starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
-    else:  # one start for all (the checks still run on every flight)
-        starts = [_prepare(model, exps, names, start, 0)] * len(exps)
-    # Every device gets the same number of flights: the batch is topped up with copies of
-    # the last flight, whose results are dropped.
-    B = padded_count(len(exps))
-    fill = [exps[-1]] * (B - len(exps))
-    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill))
-    theta0s = jnp.asarray(np.stack([np.asarray(th) for _, th in starts + starts[-1:] * len(fill)]))
-    if progress:
-        print(f"fwid: fitting {model.name} to {len(exps)} flights in one batched call"
-              + (f" on {device_count()} devices" if device_count() > 1 else "") + " ...",
-              flush=True)
-    out = jax.device_get(_fit_each_batched(
-        model, theta0s, stacked, flight_mesh(B), diagonal=(noise == "diagonal"),
-        max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
-        n_local_batch=0,
-    ))
-    # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
-    # arrays flight by flight costs more than the fits of a large batch).
-    per_flight = jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])
-    results = [_result(model, sm, th, o, [n], 0)
-               for (sm, th), o, n in zip(starts, per_flight, names)]
-    if progress:
-        ok = sum(bool(r.converged) for r in results)
-        print(f"fwid: {ok}/{len(results)} fits converged, {time.perf_counter() - t0:.1f} s",
-              flush=True)
-    return results
+    found = fit_warnings(result, names, max_steps, information=out["M"])
+    return dataclasses.replace(result, warnings=tuple(found))

@@ -11,7 +11,8 @@ import numpy as np
 
 from .._errors import InputError
 from ..data._flight import Flight
-from ..estimate._output_error import FitResult, fit, fit_each
+from ..estimate._each import fit_each
+from ..estimate._output_error import FitResult, fit
 from ..models._delfly import lateral, longitudinal
 from ..models._greybox import GreyBoxModel
 from ..simulate._averaged import averaged

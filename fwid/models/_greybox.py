@@ -144,11 +144,23 @@ class GreyBoxModel(eqx.Module):
         return out
 
     def state_matrices(
-        self, params: Params, consts: Mapping[str, Array]
+        self, params: Params, consts: Mapping[str, Array],
+        x0: Float[Array, " nx"] | None = None, u0: Float[Array, " nu"] | None = None,
     ) -> tuple[Float[Array, "nx nx"], Float[Array, "nx nu"]]:
-        """`A = df/dx`, `B = df/du` at the linearisation point `x = 0, u = 0`."""
-        x0 = jnp.zeros(len(self.states))
-        u0 = jnp.zeros(len(self.inputs))
+        """`A = df/dx`, `B = df/du` (the linearised Eq. 7) at the point `x0`, `u0`.
+
+        By default the point is `x = 0, u = 0`. For fwid's DelFly models (Eqs. 1-6), whose
+        states and inputs are perturbations from the flight's trim, that *is* the trim. For a
+        model in absolute states (e.g. one with the airspeed `V` as a state) `x = 0` is no
+        flight condition at all: give the trim as `x0` (and `u0`).
+        """
+        x0 = jnp.zeros(len(self.states)) if x0 is None else jnp.asarray(x0, dtype=float)
+        u0 = jnp.zeros(len(self.inputs)) if u0 is None else jnp.asarray(u0, dtype=float)
+        if x0.shape != (len(self.states),) or u0.shape != (len(self.inputs),):
+            raise ValueError(
+                f"{self.name}: linearisation point x0 {tuple(x0.shape)} / u0 {tuple(u0.shape)} "
+                f"must have shapes ({len(self.states)},) (states {', '.join(self.states)}) and "
+                f"({len(self.inputs)},) (inputs {', '.join(self.inputs)})")
         A = jax.jacfwd(self.f, argnums=0)(x0, u0, params, dict(consts))
         B = jax.jacfwd(self.f, argnums=1)(x0, u0, params, dict(consts))
         return A, B

@@ -17,6 +17,7 @@ from ._diagnosis import diagnosis_summary as diagnosis_summary, plot_gap_map as 
 from ._figures import plot_flight_fit as plot_flight_fit, plot_poles as plot_poles
 from ._flapping import combined_report as combined_report, flapping_report as flapping_report
 from ._identification import (
+    converged_flags as converged_flags,
     identification_report as identification_report,
     modes_spread as modes_spread,
     pooled_metrics as pooled_metrics,

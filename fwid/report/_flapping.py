@@ -14,6 +14,7 @@ from ._identification import (
     add_validation,
     eig_list,
     fit_info,
+    fit_warnings_of,
     identification_report,
     parameters,
     pooled_metrics,
@@ -41,6 +42,7 @@ def flapping_report(ident: FlappingIdentification, steady=None) -> dict:
         "flapping_frequency": dict(ident.frequencies),
         "peaks": ident.peaks,
         "units": "SI: N, N m; phase offsets in rad; rms in the output's unit",
+        "warnings": fit_warnings_of(ident.fits),
     }
     if len(ident.fits) == 1:
         report["parameters"] = parameters(ident.fit)
@@ -107,6 +109,7 @@ def combined_report(ident: CombinedIdentification) -> dict:
         "cycle_averaged": cyc,
         "flapping": flap,
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
+        "warnings": list(cyc.get("warnings", [])) + list(flap["warnings"]),
     }
     return add_validation(report, ident.validation)
 

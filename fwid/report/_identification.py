@@ -24,7 +24,28 @@ def fit_info(fit, outputs) -> dict:
     """The `fit` block of a report: convergence, steps, cost and the noise covariance R."""
     return {"converged": bool(fit.converged), "passes": int(fit.passes),
             "gauss_newton_steps": int(fit.steps), "cost": float(fit.cost),
-            "R": np.asarray(fit.R), "outputs": list(outputs)}
+            "R": np.asarray(fit.R), "noise": getattr(fit, "noise", "full"),
+            "outputs": list(outputs),
+            "warnings": list(getattr(fit, "warnings", ()))}
+
+
+def fit_warnings_of(fits) -> list[str]:
+    """The `warnings` key of a report: every fit's warnings, in order (empty when none)."""
+    return [w for f in fits for w in getattr(f, "warnings", ())]
+
+
+def converged_flags(report: dict) -> list[bool]:
+    """Whether each fit behind a report converged (its `fit` block, or each flight's); for
+    the combined model, those of its cycle-averaged part, else of its flapping part."""
+    if report.get("model") == "combined":
+        for part in ("cycle_averaged", "flapping"):
+            flags = converged_flags(report.get(part, {}))
+            if flags:
+                return flags
+        return []
+    if "per_flight" in report:
+        return [bool(p["fit"]["converged"]) for p in report["per_flight"] if "fit" in p]
+    return [bool(report["fit"]["converged"])] if "fit" in report else []
 
 
 def _fit_block(ident, fit, estimation, eigs):
@@ -97,6 +118,7 @@ def identification_report(ident) -> dict:
         "trim_and_vehicle": ident.consts,
         "state_space": ident.state_space().to_json(),
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
+        "warnings": fit_warnings_of(ident.fits),
     }
     add_validation(report, ident.validation)
     if len(ident.fits) == 1:

@@ -61,6 +61,11 @@ def modes_table(modes: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def warnings_lines(report: dict) -> list[str]:
+    """The report's `warnings`, one `WARNING:` line each (none when there are none)."""
+    return [""] + [f"WARNING: {w}" for w in report["warnings"]] if report.get("warnings") else []
+
+
 def identification_summary(report: dict) -> str:
     """The terminal summary of `fwid identify`: parameters, modes, metrics."""
     out = [f"fwid identify: model {report['model']}, flights: {', '.join(report['flights'])}"]
@@ -70,7 +75,7 @@ def identification_summary(report: dict) -> str:
     out.append(metrics_table(report["metrics"]["estimation"], "match with estimation data:"))
     if "validation" in report["metrics"]:
         out += ["", metrics_table(report["metrics"]["validation"], "match with validation data:")]
-    return "\n".join(out)
+    return "\n".join(out + warnings_lines(report))
 
 
 def _peak_summary(peaks: dict) -> list[str]:
@@ -117,4 +122,4 @@ def flapping_summary(report: dict) -> str:
             out.append(f"{o:<8}{a['rms']:>12.3e}{a['rms_pct']:>9.2f}{a['nonharmonic_pct']:>11.2f}"
                        f"{b['rms']:>15.3e}{b['rms_pct']:>9.2f}{b['nonharmonic_pct']:>11.2f}")
     out += ["", "first flapping peaks, measured/model:"] + _peak_summary(report["peaks"])
-    return "\n".join(out)
+    return "\n".join(out + warnings_lines(report))

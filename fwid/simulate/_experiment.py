@@ -10,6 +10,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._errors import FlightDataError
+from ._checks import check_experiment, check_lengths, check_time_axis
 
 
 class Experiment(eqx.Module):
@@ -19,7 +20,8 @@ class Experiment(eqx.Module):
     - `t`: time [s], uniform step.
     - `u`: inputs, `(n, inputs)` (perturbations for the DelFly models).
     - `z`: measured outputs, `(n, outputs)`.
-    - `x0`: initial state.
+    - `x0`: initial state; omitted, the first sample of `z` (only right when the model's
+      outputs are the states: [`fwid.fit`][] says so otherwise).
     - `consts`: per-flight constants the model reads (mass, inertia, trim).
     - `mask`: 1 on real samples, 0 on padding (see [`fwid.stack_experiments`][]).
     - `forces`: measured (reconstructed) aerodynamic forces `(n, force_names)` or `None`.
@@ -32,13 +34,19 @@ class Experiment(eqx.Module):
     consts: dict[str, Float[Array, ""]]
     mask: Float[Array, " n"]
     forces: Float[Array, "n nf"] | None = None
+    x0_from_z: bool = eqx.field(static=True, default=False)
 
     def __init__(self, t, u, z, x0=None, consts=None, mask=None, forces=None):
+        if np.ndim(t) == 1 and mask is None:  # one experiment (not a padded batch): check t
+            check_time_axis(t)
         self.t = jnp.asarray(t, dtype=float)
         u = jnp.asarray(u, dtype=float)
         self.u = u[:, None] if u.ndim == 1 else u
         z = jnp.asarray(z, dtype=float)
         self.z = z[:, None] if z.ndim == 1 else z
+        if self.t.ndim == 1:
+            check_lengths(self.t, self.u, self.z)
+        self.x0_from_z = x0 is None
         self.x0 = self.z[0] if x0 is None else jnp.asarray(x0, dtype=float)
         self.consts = {k: jnp.asarray(v, dtype=float) for k, v in (consts or {}).items()}
         self.mask = jnp.ones(self.t.shape) if mask is None else jnp.asarray(mask, dtype=float)
@@ -93,7 +101,9 @@ def experiment(flight, model, *, x0: str = "first") -> Experiment:
     forces = None
     if model.force_names and all(c in flight for c in model.force_names):
         forces = jnp.stack([flight.perturbation(c) for c in model.force_names], axis=-1)
-    return Experiment(flight.t, u, z, xs[0], consts, forces=forces)
+    exp = Experiment(flight.t, u, z, xs[0], consts, forces=forces)
+    check_experiment(model, exp, flight.name)
+    return exp
 
 
 def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Experiment:

@@ -5,20 +5,30 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
+from jaxtyping import Float
 
 from ..models._greybox import GreyBoxModel
 
 
-def eigenvalues(model: GreyBoxModel, consts: Mapping, params=None) -> np.ndarray:
-    """Eigenvalues of `A = df/dx` at trim, sorted by imaginary part then real part."""
-    A, _ = model.state_matrices(model.params if params is None else params, consts)
+def eigenvalues(model: GreyBoxModel, consts: Mapping, params=None, *, x0=None,
+                u0=None) -> Float[np.ndarray, " nx"]:
+    """Eigenvalues of `A = df/dx` (the linearised Eq. 7; Tables 3 and 6), sorted by
+    imaginary part then real part.
+
+    `A` is taken at `x0`, `u0` (default `x = 0, u = 0`, see
+    [`fwid.GreyBoxModel.state_matrices`][]): the trim for fwid's DelFly models, whose states
+    and inputs are perturbations from it; give the trim point for a model in absolute states.
+    """
+    A, _ = model.state_matrices(model.params if params is None else params, consts, x0, u0)
     ev = np.linalg.eigvals(np.asarray(A))
     return ev[np.lexsort((ev.real, -ev.imag))]
 
 
 def modes(eigs) -> list[dict]:
     """Each mode's kind and numbers: oscillatory modes (one per conjugate pair) give the
-    natural frequency `wn` [rad/s], damping ratio `zeta`, damped frequency [Hz] and period;
+    natural frequency `wn` [rad/s] and `natural_freq_hz` (`wn / 2 pi`), the damping ratio
+    `zeta`, the damped frequency `damped_freq_hz` (`|Im lambda| / 2 pi`; also kept under its
+    old name `freq_hz`) and the period of the damped oscillation;
     aperiodic modes give the time constant `tau = -1/lambda` (or the time to double when
     unstable)."""
     eigs = np.asarray(eigs, dtype=complex)
@@ -35,6 +45,8 @@ def modes(eigs) -> list[dict]:
             wn = abs(lam)
             out.append(dict(kind="oscillatory", eigenvalue=[lam.real, abs(lam.imag)],
                             wn=wn, zeta=-lam.real / wn, freq_hz=abs(lam.imag) / (2 * np.pi),
+                            damped_freq_hz=abs(lam.imag) / (2 * np.pi),
+                            natural_freq_hz=wn / (2 * np.pi),
                             period=2 * np.pi / abs(lam.imag), stable=bool(lam.real < 0)))
         else:
             re = lam.real

@@ -267,3 +267,28 @@ def test_template_folder_identifies(tmp_path, capsys):
     assert main(["template", str(out)]) == 2
     assert "not empty" in capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+def test_identify_report_has_an_empty_warnings_list_when_all_is_well(identified):
+    _, out = identified
+    report = json.loads((out / "report.json").read_text())
+    assert report["warnings"] == []
+
+
+def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatch, capsys):
+    import functools
+    import importlib
+
+    pipeline = importlib.import_module("fwid.identify._cycle_averaged")
+    monkeypatch.setattr(pipeline, "fit", functools.partial(pipeline.fit, max_steps=1))
+    with pytest.warns(UserWarning, match="did not converge"):
+        rc = main(["identify", str(flights / "lon_0.csv"), "--model", "lon",
+                   "--out", str(tmp_path), "--quiet"])
+    assert rc == 1
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and "no fit converged (flights: lon_0.csv)" in err[0]
+    assert "WARNING: lon_0.csv: the lon fit did not converge in 1 Gauss-Newton step" in captured.out
+    report = json.loads((tmp_path / "report.json").read_text())  # still written
+    assert report["fit"]["converged"] is False
+    assert any("did not converge" in w for w in report["warnings"])

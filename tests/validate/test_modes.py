@@ -66,3 +66,36 @@ def test_modes_of_plain_eigenvalues():
     assert kinds == ["aperiodic", "oscillatory", "oscillatory"]
     wns = sorted(m["wn"] for m in ms if m["kind"] == "oscillatory")
     np.testing.assert_allclose(wns, [np.hypot(0.5, 0.1), np.sqrt(5.0)], rtol=1e-12)
+
+
+def test_modes_name_natural_and_damped_frequency():
+    osc = [m for m in modes(eigenvalues(_model(), dict(k=jnp.asarray(1.0))))
+           if m["kind"] == "oscillatory"][0]
+    wd = WN * np.sqrt(1 - ZETA**2)
+    assert osc["natural_freq_hz"] == pytest.approx(WN / (2 * np.pi), rel=1e-10)
+    assert osc["damped_freq_hz"] == pytest.approx(wd / (2 * np.pi), rel=1e-10)
+    assert osc["freq_hz"] == osc["damped_freq_hz"]  # the old key stays
+
+
+def _pendulum_in_airspeed():
+    """A model in absolute states: x = (V, a); A depends on V, and is singular at V = 0."""
+
+    def f(x, u, p, c):
+        V, a = x
+        return jnp.stack([-p["d"] * V + u[0], -p["k"] * V**2 * a])
+
+    return GreyBoxModel(f, states=("V", "a"), inputs=("T",), params=dict(d=0.5, k=2.0))
+
+
+def test_state_matrices_and_eigenvalues_at_a_given_point():
+    m = _pendulum_in_airspeed()
+    A0, B0 = m.state_matrices(m.params, {})  # default: x = 0, u = 0
+    assert np.allclose(A0, [[-0.5, 0.0], [0.0, 0.0]])
+    A, B = m.state_matrices(m.params, {}, x0=jnp.array([3.0, 0.1]), u0=jnp.array([1.5]))
+    assert np.allclose(A, [[-0.5, 0.0], [-2 * 2.0 * 3.0 * 0.1, -2.0 * 9.0]])
+    assert np.allclose(B, [[1.0], [0.0]])
+    ev = eigenvalues(m, {}, x0=[3.0, 0.1], u0=[1.5])
+    assert np.allclose(np.sort(ev.real), [-18.0, -0.5])
+    assert np.allclose(np.sort(eigenvalues(m, {}).real), [-0.5, 0.0])  # the default as before
+    with pytest.raises(ValueError, match=r"x0 \(3,\).*states V, a"):
+        m.state_matrices(m.params, {}, x0=jnp.zeros(3))

@@ -1,0 +1,128 @@
+"""Each flight fitted on its own by output-error ML (Eqs. 10-11), all in one vmapped call."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import PartitionSpec
+
+from .._errors import FitDivergedError
+from ..models._greybox import GreyBoxModel
+from ..simulate._experiment import Experiment, stack_experiments
+from ._devices import device_count, flight_mesh, padded_count
+from ._noise import check_noise, choose, full_r_trouble
+from ._output_error import FitResult, _fit_batch, _prepare, _result
+from ._warnings import issue
+
+
+@eqx.filter_jit
+def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
+    """[`_fit_batch`][] on each flight alone: `vmap` over the flights. With a device `mesh`
+    (axis `"flights"`, see [`flight_mesh`][]) each device runs its share of the flights as
+    its own `vmap` (`shard_map`: the fits are independent, the devices never wait for one
+    another)."""
+    if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
+        out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
+        return jax.tree.map(lambda a: a[None], out)
+
+    def each(th, b):
+        return jax.vmap(lambda th1, b1: _fit_batch(model, th1, b1, **kw))(th, b)
+
+    if mesh is None:
+        return each(theta0s, batches)
+    spec = PartitionSpec("flights")
+    return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
+                         check_vma=False)(theta0s, batches)
+
+
+def fit_each(
+    model: GreyBoxModel,
+    experiments: Sequence[Experiment],
+    *,
+    names: Sequence[str] | None = None,
+    start: str | GreyBoxModel = "least-squares",
+    noise: str = "auto",
+    max_passes: int = 12,
+    max_steps: int = 60,
+    rtol: float = 1e-10,
+    cost_rtol: float = 1e-10,
+    progress: bool = False,
+) -> list[FitResult]:
+    """Fit `model` to each experiment on its own, all in one vmapped call.
+
+    The flights are padded to a common length and masked (a padded sample never enters a
+    cost), so one compiled estimator serves every flight and the whole batch runs as a single
+    XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
+    on each flight alone. Arguments as for [`fwid.fit`][].
+
+    **Returns:** one [`fwid.FitResult`][] per experiment, in order.
+    """
+    check_noise(noise)
+    exps = list(experiments)
+    names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    t0 = time.perf_counter()
+    if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
+        starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
+    else:  # one start for all (the checks still run on every flight)
+        starts = [_prepare(model, exps, names, start, 0)] * len(exps)
+    kw = dict(max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol)
+    if progress:
+        print(f"fwid: fitting {model.name} to {len(exps)} flights in one batched call"
+              + (f" on {device_count()} devices" if device_count() > 1 else "") + " ...",
+              flush=True)
+
+    def run(idx: list[int], diagonal: bool) -> list:
+        """The fits of flights `idx`: a FitResult each, or the FitDivergedError it raised
+        (raised at once unless `noise="auto"`, which may still rescue it)."""
+        outs = _run_batched(model, [exps[i] for i in idx], [starts[i][1] for i in idx],
+                            diagonal, kw)
+        done = []
+        for i, o in zip(idx, outs):
+            try:
+                done.append(_result(model, starts[i][0], starts[i][1], o, [names[i]], 0,
+                                    max_steps, "diagonal" if diagonal else "full"))
+            except FitDivergedError as e:
+                if noise != "auto" or diagonal:
+                    raise
+                done.append(e)
+        return done
+
+    results = run(list(range(len(exps))), noise == "diagonal")
+    if noise == "auto":
+        reasons = [("diverged" if isinstance(r, FitDivergedError) else full_r_trouble(r))
+                   for r in results]
+        redo = [i for i, why in enumerate(reasons) if why is not None]
+        if redo:
+            if progress:
+                print(f"fwid: {len(redo)} fit(s) with a full R failed: refitting them with a "
+                      "diagonal R", flush=True)
+            for i, d in zip(redo, run(redo, True)):
+                full = results[i]
+                results[i] = (d if isinstance(full, FitDivergedError)
+                              else choose(full, d, reasons[i], [names[i]]))
+    issue([w for r in results for w in r.warnings])
+    if progress:
+        ok = sum(bool(r.converged) for r in results)
+        print(f"fwid: {ok}/{len(results)} fits converged, {time.perf_counter() - t0:.1f} s",
+              flush=True)
+    return results
+
+
+def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
+    """The raw estimator output of each flight, fitted alone, in one batched call. Every
+    device gets the same number of flights: the batch is topped up with copies of the last
+    flight, whose results are dropped."""
+    B = padded_count(len(exps))
+    fill = [exps[-1]] * (B - len(exps))
+    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill))
+    th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
+    out = jax.device_get(_fit_each_batched(model, th, stacked, flight_mesh(B),
+                                           diagonal=diagonal, n_local_batch=0, **kw))
+    # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
+    # arrays flight by flight costs more than the fits of a large batch).
+    return jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])

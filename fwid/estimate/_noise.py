@@ -1,0 +1,48 @@
+"""The measurement-noise covariance R of Eqs. (10)-(11): full, diagonal, or a guarded full R.
+
+A full R (Eq. 11) lets the outputs' noise be correlated; when the outputs are nearly linearly
+dependent (or one is nearly noise-free) it goes singular and the likelihood wanders off to a
+spurious optimum, where a diagonal R (as in FVSysID and SIDPAC) does not. `noise="auto"` (the
+default of [`fwid.fit`][]) fits with a full R and falls back to a diagonal R when the full
+fit did not converge, diverged, or ended with an ill-conditioned R; `FitResult.noise` says
+which R the estimates belong to.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ._warnings import R_COND_MAX, r_condition
+
+NOISE_MODELS = ("auto", "full", "diagonal")
+
+
+def check_noise(noise: str) -> None:
+    if noise not in NOISE_MODELS:
+        raise ValueError(f"noise must be one of {', '.join(map(repr, NOISE_MODELS))}, "
+                         f"not {noise!r}")
+
+
+def full_r_trouble(result) -> str | None:
+    """Why a fit with a full R should not be kept (`None` when it can be)."""
+    if not (np.all(np.isfinite(np.asarray(result.theta))) and np.isfinite(float(result.cost))):
+        return "was not finite"
+    if not bool(result.converged):
+        return f"did not converge in {int(result.steps)} Gauss-Newton steps"
+    cond = r_condition(result.R)
+    if cond > R_COND_MAX:
+        return f"ended with an ill-conditioned R (condition number {cond:.3g})"
+    return None
+
+
+def choose(full, diagonal, reason: str, flights) -> object:
+    """The diagonal-R fit when it converged (noting why the full one was dropped), else the
+    full-R fit as it was."""
+    if diagonal is None or not bool(diagonal.converged):
+        return full
+    note = (f"{', '.join(flights)}: the {full.model.name} fit with a full R {reason}; the "
+            "estimates are those of a diagonal R (noise='diagonal'), which converged; "
+            "pass noise='full' to keep the full R")
+    return dataclasses.replace(diagonal, warnings=(note, *diagonal.warnings))

@@ -1,0 +1,100 @@
+"""No silent failure: what a finished output-error fit (Eqs. 10-11) should tell its user.
+
+[`fit_warnings`][] reads a fit's numbers and says, one sentence each, when the fit did not
+converge, when the noise covariance R of Eq. (11) is ill-conditioned, when two parameters are
+correlated so strongly that the data cannot separate them, or when the estimate or its
+uncertainty is not finite. [`fwid.fit`][] and [`fwid.fit_each`][] issue each as a
+[`fwid.FitWarning`][] and keep them in `FitResult.warnings`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+from jaxtyping import ArrayLike, Float
+
+from .._errors import FitWarning
+
+#: R whose correlation form (unit diagonal, so independent of the outputs' units) has a larger
+#: condition number is reported as ill-conditioned.
+R_COND_MAX = 1e8
+#: Parameter pairs correlated beyond this (in absolute value) are reported.
+CORR_MAX = 0.98
+
+
+def r_condition(R: Float[ArrayLike, "ny ny"]) -> float:
+    """The condition number of R in correlation form, `D^-1/2 R D^-1/2` with `D = diag(R)`
+    (R of Eq. 11; infinite when R is singular or not finite)."""
+    R = np.asarray(R, dtype=float)
+    d = np.sqrt(np.abs(np.diag(R)))
+    if not (np.all(np.isfinite(R)) and np.all(d > 0)):
+        return float("inf")
+    return float(np.linalg.cond(R / np.outer(d, d)))
+
+
+def correlated_pairs(corr: Float[ArrayLike, "p p"], names: Sequence[str],
+                     limit: float = CORR_MAX) -> list[tuple[str, str, float]]:
+    """The parameter pairs whose estimates are correlated beyond `limit`, strongest first."""
+    c = np.asarray(corr, dtype=float)
+    i, j = np.triu_indices(len(names), 1)
+    keep = np.abs(c[i, j]) > limit
+    pairs = [(names[a], names[b], float(c[a, b])) for a, b in zip(i[keep], j[keep])]
+    return sorted(pairs, key=lambda p: -abs(p[2]))
+
+
+def collinear_pairs(M: Float[ArrayLike, "p p"], names: Sequence[str],
+                    limit: float = CORR_MAX) -> list[tuple[str, str, float]]:
+    """Pairs whose sensitivities are collinear beyond `limit`: the off-diagonal of the
+    information matrix `M` scaled to a unit diagonal (where `M` is singular and the
+    correlation of the estimates does not exist)."""
+    M = np.asarray(M, dtype=float)
+    d = np.sqrt(np.clip(np.diag(M), 0, None))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return correlated_pairs(np.nan_to_num(M / np.outer(d, d)), names, limit)
+
+
+def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
+                 information: Float[ArrayLike, "p p"] | None = None) -> list[str]:
+    """The warnings of one fit (a [`fwid.FitResult`][]), each a sentence that names the
+    flights, what is wrong and what to try. `information`: the Fisher information matrix at
+    the estimate, to name the parameters that cannot be separated when it is singular."""
+    who = f"{', '.join(flights)}: the {result.model.name} fit"
+    out = []
+    if not (np.all(np.isfinite(np.asarray(result.theta)))
+            and np.isfinite(float(result.cost))):
+        out.append(f"{who} diverged: the simulation or the estimate is not finite; check the "
+                   "units, the trim and the start values")
+    elif not np.all(np.isfinite(np.asarray(result.std))):
+        out.append(f"{who} has non-finite standard deviations (the simulation or the "
+                   "information matrix is not finite at the estimate): the uncertainty "
+                   "cannot be trusted")
+    if not bool(result.converged):
+        cap = f" (max_steps={max_steps})" if max_steps is not None else ""
+        steps = int(result.steps)
+        out.append(f"{who} did not converge in {steps} Gauss-Newton "
+                   f"step{'s' if steps != 1 else ''}{cap}: "
+                   "the estimates may be far from the optimum; raise max_steps, try "
+                   "noise='diagonal' or better start values")
+    cond = r_condition(result.R)
+    if cond > R_COND_MAX:
+        out.append(f"{who}: the noise covariance R is ill-conditioned (condition number "
+                   f"{cond:.3g} in correlation form): outputs are nearly linearly dependent "
+                   "or noise-free; try noise='diagonal'")
+    pairs = correlated_pairs(result.corr, result.names)
+    if not pairs and information is not None and not np.all(np.isfinite(np.asarray(result.corr))):
+        pairs = collinear_pairs(information, result.names)
+    if pairs:
+        listed = ", ".join(f"{a} and {b} ({c:+.4f})" for a, b, c in pairs[:5])
+        more = f" and {len(pairs) - 5} more" if len(pairs) > 5 else ""
+        out.append(f"{who}: parameters nearly unidentifiable, correlated beyond {CORR_MAX}: "
+                   f"{listed}{more}; fix one of each pair (`model.with_free(...)`) or add "
+                   "flights whose inputs separate them")
+    return out
+
+
+def issue(messages: Sequence[str], stacklevel: int = 3) -> None:
+    """Issue each message as a [`fwid.FitWarning`][]."""
+    for m in messages:
+        warnings.warn(m, FitWarning, stacklevel=stacklevel)

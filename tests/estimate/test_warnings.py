@@ -1,0 +1,137 @@
+"""No silent failure: a fit that should not be trusted says so with a FitWarning."""
+
+import warnings
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import fwid
+from fwid.estimate import fit_warnings
+
+T = np.arange(400) * 0.01
+U = np.sign(np.sin(2 * T))
+
+
+def _sum_lag():
+    """`a1` and `a2` only enter as their sum."""
+    def f(x, u, p, c):
+        return jnp.stack([-(p["a1"] + p["a2"]) * x[0] + p["b"] * u[0]])
+
+    return fwid.GreyBoxModel(f, states=("x",), inputs=("u",), name="lag",
+                             params=dict(a1=1.0, a2=0.5, b=1.0))
+
+
+def _data(model, ny=1, noise=0.01, seed=0):
+    _, ys = fwid.simulate(model, fwid.Experiment(T, U, np.zeros((T.size, ny)), x0=np.zeros(1)))
+    rng = np.random.default_rng(seed)
+    return np.asarray(ys) + noise * rng.standard_normal((T.size, ny))
+
+
+def _simple(h=None, outputs=None, name="lag"):
+    return fwid.GreyBoxModel(lambda x, u, p, c: jnp.stack([-p["a"] * x[0] + p["b"] * u[0]]),
+                             states=("x",), inputs=("u",), params=dict(a=1.0, b=1.0),
+                             h=h, outputs=outputs, name=name)
+
+
+def _twice():
+    """The state measured twice, the second copy with almost no noise of its own: R nearly
+    singular."""
+    model = _simple(h=lambda x, u, p, c: jnp.stack([x[0], x[0]]), outputs=("y1", "y2"),
+                    name="twice")
+    z = _data(model.with_params(a=3.0, b=2.0), ny=2)[:, :1]
+    rng = np.random.default_rng(1)
+    return model, np.concatenate([z, z + 1e-7 * rng.standard_normal(z.shape)], axis=1)
+
+
+def _fit(model, z, **kw):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = fwid.fit(model, fwid.Experiment(T, U, z, x0=np.zeros(1)), names=["f1"], **kw)
+    return r, [str(w.message) for w in caught if issubclass(w.category, fwid.FitWarning)]
+
+
+def test_fitwarning_is_a_userwarning_users_can_filter():
+    assert issubclass(fwid.FitWarning, UserWarning)
+
+
+def test_not_converged_warns_and_is_in_the_result():
+    model = _simple()
+    z = _data(model.with_params(a=3.0, b=2.0))
+    r, caught = _fit(model, z, start="model", max_steps=1)
+    assert not bool(r.converged)
+    msg = "f1: the lag fit did not converge in 1 Gauss-Newton step (max_steps=1)"
+    assert any(m.startswith(msg) for m in caught), caught
+    assert any(m.startswith(msg) for m in r.warnings)
+
+
+def test_a_good_fit_has_no_warnings():
+    model = _simple()
+    r, caught = _fit(model, _data(model.with_params(a=3.0, b=2.0)), start="model")
+    assert bool(r.converged) and r.warnings == () and caught == []
+
+
+def test_parameters_entering_as_a_sum_are_named():
+    model = _sum_lag()
+    r, caught = _fit(model, _data(model.with_params(a1=1.2, a2=0.8)), start="model")
+    found = [m for m in caught if "nearly unidentifiable" in m]
+    assert found and "a1 and a2" in found[0] and "correlated beyond 0.98" in found[0]
+
+
+def test_nearly_correlated_pair_is_named_with_its_correlation():
+    def f(x, u, p, c):  # a2 nearly only through the sum: corr(a1, a2) close to -1
+        return jnp.stack([-(p["a1"] + p["a2"]) * x[0] + p["b"] * u[0] + 0.03 * p["a2"] * x[0] ** 2])
+
+    model = fwid.GreyBoxModel(f, states=("x",), inputs=("u",),
+                              params=dict(a1=1.0, a2=0.5, b=1.0), name="near")
+    r, caught = _fit(model, _data(model.with_params(a1=1.2, a2=0.8)), start="model")
+    found = [m for m in caught if "nearly unidentifiable" in m]
+    assert found and "a1 and a2 (" in found[0]
+    assert abs(float(r.corr[0, 1])) > 0.98
+
+
+def test_ill_conditioned_R_says_the_condition_number():
+    model, z2 = _twice()
+    r, caught = _fit(model, z2, start="model", noise="full")
+    assert r.noise == "full"
+    found = [m for m in caught if "ill-conditioned" in m]
+    assert found and "f1: the twice fit: the noise covariance R is ill-conditioned " \
+                     "(condition number " in found[0]
+    assert "noise='diagonal'" in found[0]
+
+
+def test_non_finite_estimate_is_reported():
+    model = _simple()
+    r, _ = _fit(model, _data(model.with_params(a=3.0, b=2.0)), start="model")
+    bad = r.__class__(**{**{k: getattr(r, k) for k in r.__dataclass_fields__},
+                         "theta": jnp.array([jnp.nan, 1.0]), "warnings": ()})
+    assert fit_warnings(bad, ["f1"])[0].startswith("f1: the lag fit diverged")
+    nan_std = r.__class__(**{**{k: getattr(r, k) for k in r.__dataclass_fields__},
+                             "std": jnp.array([jnp.nan, 1.0]), "warnings": ()})
+    assert "non-finite standard deviations" in fit_warnings(nan_std, ["f1"])[0]
+
+
+def test_fit_each_warns_per_flight():
+    model = _simple()
+    exps = [fwid.Experiment(T, U, _data(model.with_params(a=3.0, b=2.0), seed=s), x0=np.zeros(1))
+            for s in (0, 1)]
+    with pytest.warns(fwid.FitWarning, match="g2: the lag fit did not converge"):
+        rs = fwid.fit_each(model, exps, names=["g1", "g2"], start="model", max_steps=1)
+    assert all(r.warnings for r in rs)
+
+
+def test_auto_noise_falls_back_to_a_diagonal_R_and_says_so():
+    model, z2 = _twice()
+    r, caught = _fit(model, z2, start="model")  # noise="auto", the default
+    assert r.noise == "diagonal" and bool(r.converged)
+    assert np.count_nonzero(np.asarray(r.R) - np.diag(np.diag(np.asarray(r.R)))) == 0
+    note = [m for m in caught if "with a full R ended with an ill-conditioned R" in m]
+    assert note and "estimates are those of a diagonal R" in note[0]
+    assert abs(float(r.params["a"]) - 3.0) < 0.05
+    exps = [fwid.Experiment(T, U, z2, x0=np.zeros(1))] * 2
+    with pytest.warns(fwid.FitWarning, match="g1: the twice fit with a full R"):
+        each = fwid.fit_each(model, exps, names=["g1", "g2"], start="model")
+    assert [e.noise for e in each] == ["diagonal", "diagonal"]
+    assert fwid.fit(model, exps[0], start="model", noise="diagonal").noise == "diagonal"
+    with pytest.raises(ValueError, match="noise must be one of 'auto', 'full', 'diagonal'"):
+        fwid.fit(model, exps[0], noise="fool")
