@@ -15,7 +15,7 @@ from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
 from ._devices import device_count, flight_mesh, padded_count
-from ._noise import check_noise, choose, full_r_trouble
+from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result
 from ._warnings import issue
 
@@ -94,17 +94,7 @@ def fit_each(
 
     results = run(list(range(len(exps))), noise == "diagonal")
     if noise == "auto":
-        reasons = [("diverged" if isinstance(r, FitDivergedError) else full_r_trouble(r))
-                   for r in results]
-        redo = [i for i, why in enumerate(reasons) if why is not None]
-        if redo:
-            if progress:
-                print(f"fwid: {len(redo)} fit(s) with a full R failed: refitting them with a "
-                      "diagonal R", flush=True)
-            for i, d in zip(redo, run(redo, True)):
-                full = results[i]
-                results[i] = (d if isinstance(full, FitDivergedError)
-                              else choose(full, d, reasons[i], [names[i]]))
+        results = fall_back(results, lambda idx: run(idx, True), [[n] for n in names], progress)
     issue([w for r in results for w in r.warnings])
     if progress:
         ok = sum(bool(r.converged) for r in results)

@@ -11,9 +11,11 @@ which R the estimates belong to.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from .._errors import FitDivergedError
 from ._warnings import R_COND_MAX, r_condition
 
 NOISE_MODELS = ("auto", "full", "diagonal")
@@ -46,3 +48,26 @@ def choose(full, diagonal, reason: str, flights) -> object:
             "estimates are those of a diagonal R (noise='diagonal'), which converged; "
             "pass noise='full' to keep the full R")
     return dataclasses.replace(diagonal, warnings=(note, *diagonal.warnings))
+
+
+def fall_back(results: Sequence, refit: Callable[[list[int]], list],
+              flights: Sequence[Sequence[str]], progress: bool = False) -> list:
+    """`noise="auto"` for [`fwid.fit`][] and [`fwid.fit_each`][]: each full-R result (a
+    FitResult, or the FitDivergedError its fit raised) that should not be kept is replaced by
+    its diagonal-R refit (`refit(indices)`, one result per index) where that converged
+    ([`choose`][]); a diverged full-R fit by its refit whatever it gave. `flights`: the
+    flights of each result, for the messages."""
+    reasons = [("diverged" if isinstance(r, FitDivergedError) else full_r_trouble(r))
+               for r in results]
+    redo = [i for i, why in enumerate(reasons) if why is not None]
+    out = list(results)
+    if not redo:
+        return out
+    if progress:
+        print(f"fwid: {len(redo)} fit(s) with a full R failed ("
+              + "; ".join(dict.fromkeys(reasons[i] for i in redo))
+              + "): refitting with a diagonal R", flush=True)
+    for i, d in zip(redo, refit(redo)):
+        out[i] = (d if isinstance(results[i], FitDivergedError)
+                  else choose(results[i], d, reasons[i], flights[i]))
+    return out

@@ -23,7 +23,7 @@ from ._gauss_newton import (
     RelaxedGaussNewton,
     jacobian_once,
 )
-from ._noise import check_noise, choose, full_r_trouble
+from ._noise import check_noise, fall_back
 from ._start import least_squares_start
 from ._uncertainty import (
     coloured_residual_middle,
@@ -309,16 +309,10 @@ def fit(
         result = run(noise == "diagonal")
     else:
         try:
-            result = run(False)
-            reason = full_r_trouble(result)
-        except FitDivergedError:
-            result, reason = None, "diverged"
-        if reason is not None:
-            if progress:
-                print(f"fwid: the fit with a full R {reason}: refitting with a diagonal R",
-                      flush=True)
-            result = (run(True) if result is None
-                      else choose(result, run(True), reason, names))
+            first = run(False)
+        except FitDivergedError as e:  # a diagonal R may still rescue it
+            first = e
+        result = fall_back([first], lambda idx: [run(True)], [names], progress)[0]
     issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
