@@ -1,65 +1,67 @@
-"""Which effect: fit each candidate on the training flights, test it out of sample, rank.
+"""The least-squares engine of the attribution: the baseline and any set of catalogue effects,
+fitted to the loads of some flights and scored on others.
 
-Significance is judged by cross-validation over whole flights (or, with fewer than
-`MIN_FOLDS` training flights, contiguous blocks of them): each fold's model is fitted on the
-other folds and scored on the held-out one, for the baseline and for every candidate. The
-per-fold log ratios of the held-out mean-square errors are independent across flights, so the
-test stays valid when the residuals within a flight are coloured (they always are, Morelli &
-Klein 1995), and over-fitting costs a candidate out of sample instead of being rewarded. A
-candidate is significant for a load when the mean log ratio is positive by a one-sided t test at
-level `ALPHA` divided by the number of (candidate, load) pairs tried (Bonferroni), and the
-held-out error drops by at least `MIN_GAIN`.
+A *model* is a tuple of `(Effect, variant)` pairs added to the paper's baseline (Eqs. 2-6 below
+the split, Eq. 12 above it). A *channel* is a `(load, band)` pair; each is fitted on its own,
+with the regressors of the effects that act in its band. A *unit* is a flight or a block of
+one: its trim load and flapping Fourier coefficients are its own (`_regression.py`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import stats
 
 from ._catalogue import CATALOGUE, Effect, base_columns
 from ._regression import Projector, harmonic_series, local_design, residual, solve
-from ._signals import BANDS, Signals
+from ._signals import Signals
 
-#: Family-wise false-alarm level of the significance test.
-ALPHA = 0.01
-#: Smallest relative drop of the held-out mean-square error that counts (2 %).
-MIN_GAIN = 0.02
-#: Fewest cross-validation folds; fewer training flights are cut into blocks.
-MIN_FOLDS = 8
+Model = tuple  # of (Effect, variant) pairs
 
 
 @dataclasses.dataclass
-class _Unit:
+class Unit:
+    """A flight, or rows `rows` of the flight unit `parent` (a block): a block's regressors
+    are its flight's, sliced (a lagged deflection or a flapping series is computed on the
+    whole flight), its local terms its own."""
+
     signals: Signals
     local: dict[str, np.ndarray]  # by band
     projector: dict[str, Projector]  # by band
+    parent: int | None = None
+    rows: slice | None = None
 
 
-def units(sigs: Sequence[Signals]) -> list[_Unit]:
-    """Local designs: a constant below the split, the Fourier series of Eq. (12) above it."""
+def units(sigs: Sequence[Signals], parents: Sequence[tuple[int, slice]] | None = None
+          ) -> list[Unit]:
+    """Local designs: a constant below the split, the Fourier series of Eq. (12) above it.
+    `parents`, if given, is each signal's `(parent unit, rows)`."""
     out = []
-    for s in sigs:
+    for k, s in enumerate(sigs):
         local = {"averaged": np.ones((s.n, 1)), "flapping": local_design(s.phase)}
-        out.append(_Unit(s, local, {b: Projector(m) for b, m in local.items()}))
+        parent, rows = parents[k] if parents is not None else (None, None)
+        out.append(Unit(s, local, {b: Projector(m) for b, m in local.items()}, parent, rows))
     return out
 
 
+def in_band(model: Model, band: str) -> Model:
+    return tuple((e, v) for e, v in model if e.band == band)
+
+
 class Engine:
-    """Fits the baseline and the candidates of `catalogue` to the loads of some flights.
+    """Fits the baseline plus any model of `catalogue` effects to the `loads` of some units and
+    scores it on others. Designs and fits are cached, so forward selection and the two halves of
+    the cross-fit reuse each other's work."""
 
-    A *channel* is a `(load, band)` pair; each is fitted on its own.
-    """
-
-    def __init__(self, all_units: Sequence[_Unit], loads: Sequence[str], catalogue=CATALOGUE):
+    def __init__(self, all_units: Sequence[Unit], loads: Sequence[str], catalogue=CATALOGUE):
         self.units = list(all_units)
         self.loads = tuple(loads)
         self.catalogue = tuple(catalogue)
-        self._cache: dict = {}
+        self._design: dict = {}
         self._series: dict = {}
+        self._fits: dict = {}
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]
@@ -74,115 +76,74 @@ class Engine:
             self._series[(i, load)] = harmonic_series(u.signals.phase, coef)
         return self._series[(i, load)]
 
-    def design(self, i, channel, effect: Effect | None = None, variant=None) -> np.ndarray:
+    def design(self, i: int, channel, model: Model = ()) -> np.ndarray:
+        """Unit `i`'s global regressors of `channel` under `model`: the baseline's, the acting
+        deflection of an effect that `replaces_input` in place of the measured one, then the
+        other effects' columns."""
         load, band = channel
-        key = (i, channel, None if effect is None else effect.name, variant)
-        if key not in self._cache:
+        model = in_band(model, band)
+        key = (i, channel, tuple((e.name, v) for e, v in model))
+        if key not in self._design and self.units[i].parent is not None:
+            u = self.units[i]
+            self._design[key] = self.design(u.parent, channel, model)[u.rows]
+        if key not in self._design:
             s = self.units[i].signals
-            if effect is None:
-                self._cache[key] = base_columns(s, load, band)
-            else:
-                h, dh = self.series(i, load)
-                extra = effect.columns(s, load, variant, h, dh)
-                base = self.design(i, channel)
-                if effect.replaces_input:  # the control is the last base column
-                    self._cache[key] = np.concatenate([base[:, :-1], extra], axis=1)
+            g = base_columns(s, load, band)
+            h, dh = self.series(i, load) if model else (None, None)
+            extra = []
+            for e, v in model:
+                cols = e.columns(s, load, v, h, dh)
+                if e.replaces_input:  # the control is the last base column
+                    g = np.concatenate([g[:, :-1], cols], axis=1)
                 else:
-                    self._cache[key] = np.concatenate([base, extra], axis=1)
-        return self._cache[key]
+                    extra.append(cols)
+            self._design[key] = np.concatenate([g] + extra, axis=1) if extra else g
+        return self._design[key]
 
-    def target(self, i, channel) -> np.ndarray:
+    def target(self, i: int, channel) -> np.ndarray:
         load, band = channel
         return self.units[i].signals.loads[band][load]
 
-    def fit(self, idx, channel, effect=None, variant=None):
-        """Global coefficients on units `idx`; returns `(theta, sse)` (training error)."""
-        band = channel[1]
-        g = [self.design(i, channel, effect, variant) for i in idx]
-        y = [self.target(i, channel) for i in idx]
-        p = [self.units[i].projector[band] for i in idx]
-        return solve(g, y, p)
+    def n_samples(self, idx) -> int:
+        return sum(self.units[i].signals.n for i in idx)
 
-    def residual(self, i, channel, theta, effect=None, variant=None) -> np.ndarray:
+    def fit(self, idx: Sequence[int], channel, model: Model = ()):
+        """Global coefficients on units `idx`: `(theta, sse)` (the training error)."""
+        model = in_band(model, channel[1])
+        key = (tuple(idx), channel, tuple((e.name, v) for e, v in model))
+        if key not in self._fits:
+            band = channel[1]
+            self._fits[key] = solve([self.design(i, channel, model) for i in idx],
+                                    [self.target(i, channel) for i in idx],
+                                    [self.units[i].projector[band] for i in idx])
+        return self._fits[key]
+
+    def residual(self, i: int, channel, theta, model: Model = ()) -> np.ndarray:
         """Unit `i`'s residual with the global `theta`, its local terms re-estimated."""
-        return residual(self.design(i, channel, effect, variant), self.target(i, channel),
+        return residual(self.design(i, channel, model), self.target(i, channel),
                         self.units[i].projector[channel[1]], theta)
 
-    def fit_effect(self, idx, effect, sigma2):
-        """Best variant of `effect` on units `idx`: `(variant, {channel: theta})`, the variant
-        minimising the training error summed over the effect's channels, each scaled by
-        `sigma2` (the baseline's)."""
-        best = None
-        for v in effect.variants:
-            fits = {ch: self.fit(idx, ch, effect, v) for ch in self.channels(effect.band)}
-            cost = sum(fits[ch][1] / sigma2[ch] for ch in fits)
-            if best is None or cost < best[0]:
-                best = (cost, v, {ch: fits[ch][0] for ch in fits})
-        return best[1], best[2]
+    def mean_square(self, idx, model: Model = ()) -> dict:
+        """Training mean-square error per channel (both bands) of `model` on units `idx`."""
+        n = self.n_samples(idx)
+        return {ch: max(self.fit(idx, ch, model)[1] / n, 1e-300)
+                for band in ("averaged", "flapping") for ch in self.channels(band)}
 
+    def best_variant(self, idx, model: Model, effect: Effect, sigma2: dict):
+        """The variant of `effect` (added to `model`) with the least training error on units
+        `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's)."""
+        if len(effect.variants) == 1:
+            return effect.variants[0]
+        costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
+                     for ch in self.channels(effect.band)) for v in effect.variants]
+        return effect.variants[int(np.argmin(costs))]
 
-@dataclasses.dataclass
-class CrossValidation:
-    """Held-out mean-square errors per fold and channel: `base[k][channel]`,
-    `candidates[name][k][channel]`."""
-
-    folds: list[str]
-    base: list[dict]
-    candidates: dict[str, list[dict]]
-
-
-def cross_validate(engine: Engine, idx: Sequence[int]) -> CrossValidation:
-    """Leave-one-unit-out over `idx` for the baseline and each candidate."""
-    base, cand = [], {e.name: [] for e in engine.catalogue}
-    for k in idx:
-        train = [i for i in idx if i != k]
-        sigma2, eb = {}, {}
-        for band in BANDS:
-            for ch in engine.channels(band):
-                th, sse = engine.fit(train, ch)
-                sigma2[ch] = max(sse, 1e-300)
-                eb[ch] = float(np.mean(engine.residual(k, ch, th) ** 2))
-        base.append(eb)
-        for e in engine.catalogue:
-            v, th = engine.fit_effect(train, e, sigma2)
-            cand[e.name].append({
-                ch: float(np.mean(engine.residual(k, ch, th[ch], e, v) ** 2)) for ch in th
-            })
-    return CrossValidation([engine.units[k].signals.name for k in idx], base, cand)
-
-
-@dataclasses.dataclass
-class LoadTest:
-    """Out-of-sample evidence for one candidate on one load."""
-
-    gain: float  # mean relative drop of the held-out mean-square error
-    t: float  # t statistic of the per-fold log ratios
-    p: float  # one-sided p value
-    folds_better: int
-
-    @property
-    def as_dict(self):
-        return {"cv_gain_pct": 100 * self.gain, "t": self.t, "p": self.p,
-                "folds_better": self.folds_better}
-
-
-def load_tests(cv: CrossValidation, name: str) -> dict[tuple, LoadTest]:
-    """Per channel of candidate `name`: its out-of-sample evidence."""
-    out = {}
-    n = len(cv.folds)
-    for ld in cv.candidates[name][0]:
-        before = np.array([f[ld] for f in cv.base])
-        after = np.array([f[ld] for f in cv.candidates[name]])
-        d = np.log(before / after)
-        gain = float(np.mean(1.0 - after / before))
-        sd = float(np.std(d, ddof=1)) if n > 1 else math.inf
-        t = float(np.mean(d) / (sd / math.sqrt(n))) if sd > 0 else (
-            math.inf if np.mean(d) > 0 else -math.inf)
-        p = float(stats.t.sf(t, df=max(n - 1, 1)))
-        out[ld] = LoadTest(gain, t, p, int(np.sum(d > 0)))
-    return out
-
-
-def significant_loads(tests: dict[str, LoadTest], n_tests: int, alpha=ALPHA, min_gain=MIN_GAIN):
-    """Loads on which the candidate passes the Bonferroni-corrected test and the gain bar."""
-    return [ld for ld, tt in tests.items() if tt.p < alpha / n_tests and tt.gain >= min_gain]
+    def block_errors(self, fit_idx, score_idx, model: Model, band: str) -> np.ndarray:
+        """Sum of squared residuals of `model` fitted on `fit_idx`, on each unit of `score_idx`
+        and channel of `band`: shape `(len(score_idx), len(loads))`."""
+        out = np.empty((len(score_idx), len(self.loads)))
+        for c, ch in enumerate(self.channels(band)):
+            th, _ = self.fit(fit_idx, ch, model)
+            for j, i in enumerate(score_idx):
+                out[j, c] = float(np.sum(self.residual(i, ch, th, model) ** 2))
+        return out

@@ -55,10 +55,14 @@ class Signals:
     def n(self) -> int:
         return len(self.t)
 
-    def block(self, i: int, count: int) -> Signals:
-        """Block `i` of `count` contiguous blocks (a cross-validation unit)."""
+    def block_rows(self, i: int, count: int) -> tuple[int, int]:
+        """First and one-past-last sample of block `i` of `count` contiguous blocks."""
         edges = np.linspace(0, self.n, count + 1).astype(int)
-        s = slice(edges[i], edges[i + 1])
+        return int(edges[i]), int(edges[i + 1])
+
+    def block(self, i: int, count: int) -> Signals:
+        """Block `i` of `count` contiguous blocks (a scoring unit)."""
+        s = slice(*self.block_rows(i, count))
         return Signals(
             name=f"{self.name}[{i + 1}/{count}]",
             t=self.t[s],
