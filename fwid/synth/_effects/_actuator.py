@@ -74,18 +74,14 @@ class Servo(Form):
         return np.concatenate([aux[..., 2:], acc], axis=-1)
 
 
-class RateLimit(Form):
+class RateLimit(Lag):
     effect, name = "actuator-dynamics", "rate-limit"
     COEFFICIENTS = {"tau": 0.03, "rmax": 3.0}
-    n_aux = 2
 
     @classmethod
     def coefficients(cls, strength):
         return {"tau": cls.COEFFICIENTS["tau"] * strength,
                 "rmax": cls.COEFFICIENTS["rmax"] / strength if strength else float("inf")}
-
-    def actuator(self, u, aux):
-        return aux
 
     def aux_rhs(self, xc, u_cmd, u, aux):
         r = self.c["rmax"]

@@ -19,25 +19,42 @@ import numpy as np
 from ._form import Form
 
 
-class Amplitude(Form):
-    effect, name = "flap-coupling", "amplitude"
-    COEFFICIENTS = {"kw": 1.5, "kq": 0.1, "kv": 1.0, "kp": 0.02}
-    harmonics = False
+_STATE = {"q": 0, "u": 1, "w": 2, "p": 4, "r": 5, "v": 6}
+
+
+def _sum(c, xc, keys, start=0.0):
+    """`start + sum_k c[k] x_k` (left to right; coefficient `k` names its state last:
+    `kw` -> w, `k2u` -> u)."""
+    out = start
+    for k in keys:
+        out = out + c[k] * xc[..., _STATE[k[-1]]]
+    return np.asarray(out)
+
+
+class _Gain(Form):
+    """Every harmonic scaled by one gain, `F' = F gain(xc, u)`."""
+
+    def gain(self, xc, u):
+        raise NotImplementedError
 
     def flapping(self, xc, u, F, H, Q):
-        c = self.c
-        dq, dp, dw, dv = xc[..., 0], xc[..., 4], xc[..., 2], xc[..., 6]
-        gain = 1.0 + c["kw"] * dw + c["kq"] * dq + c["kv"] * dv + c["kp"] * dp
-        return F * np.asarray(gain)[..., None]
+        return F * np.asarray(self.gain(xc, u))[..., None]
 
 
-class Control(Form):
+class Amplitude(_Gain):
+    effect, name = "flap-coupling", "amplitude"
+    COEFFICIENTS = {"kw": 1.5, "kq": 0.1, "kv": 1.0, "kp": 0.02}
+
+    def gain(self, xc, u):
+        return _sum(self.c, xc, ("kw", "kq", "kv", "kp"), 1.0)
+
+
+class Control(_Gain):
     effect, name = "flap-coupling", "control"
     COEFFICIENTS = {"ke": 2.3, "kr": 1.1}
 
-    def flapping(self, xc, u, F, H, Q):
-        gain = 1.0 + self.c["ke"] * u[..., 0] + self.c["kr"] * u[..., 1]
-        return F * np.asarray(gain)[..., None]
+    def gain(self, xc, u):
+        return 1.0 + self.c["ke"] * u[..., 0] + self.c["kr"] * u[..., 1]
 
 
 _N = np.arange(1.0, 4.0)
@@ -49,9 +66,7 @@ class Phase(Form):
     harmonics = True
 
     def flapping(self, xc, u, F, H, Q):
-        c = self.c
-        d = c["cw"] * xc[..., 2] + c["cq"] * xc[..., 0] + c["cv"] * xc[..., 6] + c["cp"] * xc[..., 4]
-        nd = np.asarray(d)[..., None] * _N  # (..., 3)
+        nd = _sum(self.c, xc, ("cw", "cq", "cv", "cp"))[..., None] * _N  # (..., 3)
         return F + np.einsum("...n,...nk->...k", np.cos(nd) - 1.0, H) + np.einsum(
             "...n,...nk->...k", np.sin(nd), Q)
 
@@ -62,10 +77,8 @@ class Shape(Form):
     harmonics = True
 
     def flapping(self, xc, u, F, H, Q):
-        c = self.c
-        g2 = c["k2u"] * xc[..., 1] + c["k2v"] * xc[..., 6]
-        g3 = c["k3w"] * xc[..., 2] + c["k3r"] * xc[..., 5]
-        return F + np.asarray(g2)[..., None] * H[..., 1, :] + np.asarray(g3)[..., None] * H[..., 2, :]
+        g2, g3 = _sum(self.c, xc, ("k2u", "k2v")), _sum(self.c, xc, ("k3w", "k3r"))
+        return F + g2[..., None] * H[..., 1, :] + g3[..., None] * H[..., 2, :]
 
 
 FORMS = (Amplitude, Control, Phase, Shape)
