@@ -95,24 +95,29 @@ def figure(results, path: Path) -> None:
     effects = sorted({r["effect"] for r in single})
     if not effects:
         return
-    fig, axs = plt.subplots(1, len(effects), figsize=(3.2 * len(effects), 3.0), sharey=True,
+    fig, axs = plt.subplots(1, len(effects), figsize=(3.2 * len(effects), 3.3), sharey=True,
                             squeeze=False)
+    counts = sorted({r["n"] for r in single})
+    strengths = sorted({r["strength"] for r in single})
     for ax, e in zip(axs[0], effects):
-        for n in sorted({r["n"] for r in single}):
+        for i, n in enumerate(counts):
             rows = [r for r in single if r["effect"] == e and r["n"] == n]
             ss = sorted({r["strength"] for r in rows})
             ps = [_rate([r for r in rows if r["strength"] == s]) for s in ss]
             pts = [(s, p) for s, p in zip(ss, ps) if p is not None]
             if pts:
-                ax.plot(*zip(*pts), "o-", label=f"{n}+{n}")
+                ax.plot(*zip(*pts), "o-", color=f"C{i}")
         ax.set_xscale("log", base=2)
+        ax.set_xticks(strengths, [f"{s:g}" for s in strengths])
         ax.set_title(e, fontsize=9)
         ax.set_xlabel("strength")
         ax.set_ylim(-0.05, 1.05)
         ax.axhline(0.9, color="grey", lw=0.5, ls=":")
     axs[0][0].set_ylabel("right verdict")
-    axs[0][-1].legend(fontsize=7, title="flights", title_fontsize=7)
-    fig.tight_layout()
+    handles = [plt.Line2D([], [], color=f"C{i}", marker="o") for i in range(len(counts))]
+    fig.legend(handles, [f"{n}+{n} flights" for n in counts], loc="lower center",
+               ncol=len(counts), fontsize=8)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
