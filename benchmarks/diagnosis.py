@@ -38,11 +38,13 @@ EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actua
 LOADS = ("X", "Y", "Z", "L", "M", "N")
 
 
-def _write(folder, n, axis, seed, effect, strength):
+def _write(folder, n, axis, seed, effect, strength, **kw):
+    """Write `n` blind flights (sidecars deleted) into `folder`; `kw` go to `write_flights`
+    (form, vehicle, noise, duration, rate, input, ...)."""
     from fwid.synth import write_flights
 
     paths = write_flights(folder, n, axis, seed=seed, effect=effect, strength=strength,
-                          truth_columns=True)
+                          truth_columns=True, **kw)
     for p in paths:
         p.with_suffix(".json").unlink()  # blind: no sidecar (trim, label)
     return paths

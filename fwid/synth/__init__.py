@@ -4,7 +4,11 @@ An independent numpy implementation of the paper's combined model (Eqs. 7-9 with
 cycle-averaged aerodynamics Eqs. 1-6 of Tables 1 and 4, and the flapping Fourier series
 Eq. 12 of Table 7, superposed as in Eqs. 13-15), with realistic measurement: rippling
 control surfaces, sensor noise, and loads reconstructed from the measured motion. Flights are
-written as in CONTRACTS section 1; `effect` injects an unmodelled effect (section 4).
+written as in CONTRACTS section 1; `effect` injects an unmodelled effect (section 4) in one of
+a family of forms (`form`, `FORMS`; equations in `fwid.synth._effects`), or two at once;
+`effect_noise_ratio` measures how strong it is against the noise on its loads, and
+`random_vehicle` draws a stable DelFly with every derivative and Fourier coefficient within
++-30 % of the paper's.
 """
 
 from ._delfly import (
@@ -24,8 +28,11 @@ from ._delfly import (
 from ._effects import (
     EFFECT_COEFFICIENTS as EFFECT_COEFFICIENTS,
     EFFECTS as EFFECTS,
+    FORM_COEFFICIENTS as FORM_COEFFICIENTS,
+    FORMS as FORMS,
     OUT_OF_CATALOGUE as OUT_OF_CATALOGUE,
     Effect as Effect,
+    form_axes as form_axes,
 )
 from ._inputs import (
     DEFAULT_UNIT as DEFAULT_UNIT,
@@ -42,9 +49,12 @@ from ._simulate import (
     DEFAULT_AMPLITUDE as DEFAULT_AMPLITUDE,
     NOISE as NOISE,
     FlapFrequency as FlapFrequency,
+    flapping_harmonics as flapping_harmonics,
     flapping_loads as flapping_loads,
     simulate_flight as simulate_flight,
 )
+from ._strength import effect_noise_ratio as effect_noise_ratio
+from ._vehicles import RANDOM_PARAMS as RANDOM_PARAMS, random_vehicle as random_vehicle
 from ._write import (
     INPUT_CYCLE as INPUT_CYCLE,
     write_csv as write_csv,

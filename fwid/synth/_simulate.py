@@ -9,7 +9,7 @@ Eqs. 8-9 side by side, always both axes, coupled only through an injected effect
 
     x' = K x + G dF,   dF = Fx x + Fu u_eff  (Eqs. 1-6, cycle-averaged)
                           + gain(xc) F_TV(phi_f)  (Eq. 12, flapping)
-                          + extra(xc, u_eff)     (injected effect, `_effects.py`)
+                          + extra(xc, u_eff)     (injected effect, `_effects`)
 
 integrated by superposition as `x = xc + xo`: `xc`, the cycle-averaged states, driven by the
 (commanded) input and the effect terms; `xo`, the response to the flapping loads, started on
@@ -146,40 +146,53 @@ def periodic_state(vehicle: DelFly, frequency: float, phase: float = 0.0) -> np.
 
 
 # ----------------------------------------------------------------------------- RK4
-def _integrate(vehicle, effect, t_int, u_int, F_int, F_mid, xc0, xo0, flapping):
+def flapping_harmonics(phase, vehicle: DelFly = DELFLY) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 12 per harmonic: `(H, Q)`, each `(..., 3, 6)`, `H[..., n-1, :] = a_n sin(n phase)
+    + b_n cos(n phase)` (their sum over n is `flapping_loads`) and the quadrature
+    `Q[..., n-1, :] = a_n cos(n phase) - b_n sin(n phase)` (so Eq. 12 at `phase + d` is
+    `sum_n H_n cos(n d) + Q_n sin(n d)`)."""
+    phase = np.asarray(phase, dtype=float)[..., None]
+    c = np.stack([vehicle.fourier(F) for F in FORCES], axis=-1)  # (3, 2, 6)
+    n = np.arange(1.0, 4.0)
+    s, co = np.sin(n * phase)[..., None], np.cos(n * phase)[..., None]
+    return s * c[:, 0] + co * c[:, 1], co * c[:, 0] - s * c[:, 1]
+
+
+def _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0, xo0, flapping):
     """Fixed-step RK4 over the internal grid `t_int` (step h) of the cycle-averaged states
     `xc` and, with `flapping`, the flapping response `xo` (superposition, exact for the
     linear model: `x = xc + xo`):
 
-        xc' = A xc + B u_eff + G extra(xc, u_eff)       (Eqs. 7-9, 1-6 + effect)
-        xo' = A xo + G gain(xc) F_TV(phi_f(t))          (Eq. 12 loads in Eqs. 7-9)
+        xc' = A xc + B u_eff + G extra(xc, u_eff, aux)         (Eqs. 7-9, 1-6 + effect)
+        xo' = A xo + G flap(xc, u_eff, F_TV(phi_f(t)))         (Eq. 12 loads in Eqs. 7-9)
+        aux' = effect's auxiliary dynamics (actuator, lagged states), u_eff = act(u, aux)
 
-    Effects act on the cycle-averaged states. With the `actuator-dynamics` effect two lag
-    states `u_eff' = (u_cmd - u_eff) / tau` follow. `u_int` (N+1, 2): commanded input on the
-    grid (linear between samples, so midpoints are averages); `F_int`/`F_mid`: flapping
-    loads on the grid and at the step midpoints. Returns `(xc, xo, u_eff)` on the grid
-    (`u_eff` is `None` without actuator dynamics)."""
+    Effects act on the cycle-averaged states (`active`: the effect's forms, `_effects`).
+    `u_int` (N+1, 2): commanded input on the grid (linear between samples, so midpoints are
+    averages); `F_int`/`F_mid`: flapping loads on the grid and at the step midpoints, and
+    `H_*` their harmonics `(H, Q)` where a form needs them (else `None`). Returns
+    `(xc, xo, aux)` on the grid (`aux` is `None` without auxiliary states)."""
     A, B, G = state_space(vehicle)
-    tau = effect.lag_tau()
-    lag = tau is not None
-    ext = effect.active and effect.name in ("nonlinear-aero", "lon-lat-coupling")
-    coupled = effect.active and effect.name == "flap-coupling"
+    na = active.n_aux
+    ext = active.has_extra
+    flap = active.has_flap
     io = 9 if flapping else None
-    il = (18 if flapping else 9) if lag else None
-    nz = 9 + (9 if flapping else 0) + (2 if lag else 0)
+    ia = 18 if flapping else 9
+    nz = ia + na
 
-    def rhs(z, u_cmd, F):
+    def rhs(z, u_cmd, F, H):
         xc = z[:9]
-        u = z[il:] if lag else u_cmd
+        aux = z[ia:]
+        u = active.actuator(u_cmd, aux) if na else u_cmd
         dxc = A @ xc + B @ u
         if ext:
-            dxc = dxc + G @ effect.extra_loads(xc, u)
+            dxc = dxc + G @ active.extra_loads(xc, u, aux)
         parts = [dxc]
         if flapping:
-            Fg = F * effect.flap_gain(xc) if coupled else F
+            Fg = active.flapping(xc, u, F, *H) if flap else F
             parts.append(A @ z[io : io + 9] + G @ Fg)
-        if lag:
-            parts.append((u_cmd - u) / tau)
+        if na:
+            parts.append(active.aux_rhs(xc, u_cmd, u, aux))
         return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
     n = t_int.shape[0]
@@ -188,19 +201,25 @@ def _integrate(vehicle, effect, t_int, u_int, F_int, F_mid, xc0, xo0, flapping):
     z[:9] = xc0
     if flapping:
         z[io : io + 9] = xo0
+    if na:
+        z[ia:] = active.aux0(xc0)
     Z[0] = z
     h = t_int[1] - t_int[0] if n > 1 else 0.0
+    none2 = (None, None)
     for j in range(n - 1):
         um = 0.5 * (u_int[j] + u_int[j + 1])
-        k1 = rhs(z, u_int[j], F_int[j])
-        k2 = rhs(z + 0.5 * h * k1, um, F_mid[j])
-        k3 = rhs(z + 0.5 * h * k2, um, F_mid[j])
-        k4 = rhs(z + h * k3, u_int[j + 1], F_int[j + 1])
+        Hj = (H_int[0][j], H_int[1][j]) if H_int is not None else none2
+        Hm = (H_mid[0][j], H_mid[1][j]) if H_mid is not None else none2
+        Hk = (H_int[0][j + 1], H_int[1][j + 1]) if H_int is not None else none2
+        k1 = rhs(z, u_int[j], F_int[j], Hj)
+        k2 = rhs(z + 0.5 * h * k1, um, F_mid[j], Hm)
+        k3 = rhs(z + 0.5 * h * k2, um, F_mid[j], Hm)
+        k4 = rhs(z + h * k3, u_int[j + 1], F_int[j + 1], Hk)
         z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         Z[j + 1] = z
     xc = Z[:, :9]
     xo = Z[:, io : io + 9] if flapping else np.zeros_like(xc)
-    return xc, xo, (Z[:, il:] if lag else None)
+    return xc, xo, (Z[:, ia:] if na else None)
 
 
 # ----------------------------------------------------------------------------- flight
@@ -228,8 +247,9 @@ def simulate_flight(
     flapping: bool = True,
     ripple: bool = True,
     drift: bool = False,
-    effect: str = "none",
-    strength: float = 1.0,
+    effect: str | tuple | Effect = "none",
+    strength: float | tuple = 1.0,
+    form: str | tuple | None = None,
     substeps: int = 1,
     start: float = 1.0,
     unit: float | None = None,
@@ -252,7 +272,9 @@ def simulate_flight(
     - `noise`: scale of `NOISE` (0: noise-free), or a dict of per-channel sigmas.
     - `flapping`: add the flapping loads (Eq. 12). `ripple`: measured surfaces ripple.
     - `drift`: flapping frequency ramps `DRIFT` (11.5 -> 13.2 Hz) instead of 12.5 Hz.
-    - `effect`, `strength`: an unmodelled effect (`_effects.py`, CONTRACTS section 4).
+    - `effect`, `strength`, `form`: an unmodelled effect (`_effects`, CONTRACTS section 4)
+      in one of its forms (`None`: the default form), or two at once (`"a+b"` or a tuple,
+      with a tuple of forms), or an `Effect`.
     - `substeps`: RK4 steps per sample (1: exactly the estimator's scheme).
     - `initial`: initial perturbation by state name, added to the trim (with `flapping`,
       to the periodic flapping response at t = 0, `periodic_state`, so that the flight starts
@@ -271,7 +293,10 @@ def simulate_flight(
     (true perturbation states, `(n, 9)` in `STATES` order) = `states_cycle_averaged` +
     `states_flap` (the two integrated parts), `clean` (noise-free columns),
     `loads_true` / `loads_flap` (true absolute loads / their flapping part Eq. 12, dicts by
-    load name), `u_cmd` / `u_eff` (commanded / acting deflection perturbations `[de, dr]`),
+    load name), `loads_effect` (true loads minus the paper's model, Eqs. 1-6 + 12, at the
+    true states and the measured input: the load the effect adds), `u_cmd` / `u_eff` /
+    `u_meas` (commanded / acting / logged deflection perturbations `[de, dr]`; `clean` holds
+    the logged surface columns, which trail the true ones under `sensor-offset`),
     `phase` (flapping phase at the samples), `flap` (the `FlapFrequency`).
     """
     if axis not in _AXES:
@@ -283,7 +308,8 @@ def simulate_flight(
         raise ValueError("rate and duration must be > 0")
     if loads not in ("reconstructed", "true"):
         raise ValueError(f"loads must be 'reconstructed' or 'true', got {loads!r}")
-    eff = Effect(effect, float(strength))
+    eff = effect if isinstance(effect, Effect) else Effect(effect, strength, form)
+    active = eff.bind(vehicle)
     sig = _noise_sigmas(noise)
     rng = np.random.default_rng(seed)
 
@@ -319,13 +345,19 @@ def simulate_flight(
     N = (n - 1) * substeps
     h = 1.0 / (rate * substeps)
     t_int = np.arange(N + 1) * h
-    u_int = np.stack([np.interp(t_int, t, u_cmd[:, i]) for i in range(2)], axis=1)
+    u_int = active.command(t_int, t, u_cmd)
+    if u_int is None:
+        u_int = np.stack([np.interp(t_int, t, u_cmd[:, i]) for i in range(2)], axis=1)
+    H_int = H_mid = None
     if flapping:
         F_int = flapping_loads(flap.phase(t_int), vehicle)
         F_mid = flapping_loads(flap.phase(t_int[:-1] + 0.5 * h), vehicle)
+        if active.harmonics:
+            H_int = flapping_harmonics(flap.phase(t_int), vehicle)
+            H_mid = flapping_harmonics(flap.phase(t_int[:-1] + 0.5 * h), vehicle)
     else:
-        F_int = F_mid = np.zeros((N + 1, 6))
-    gusts = eff.gusts(t_int, seed)
+        F_int, F_mid = np.zeros((N + 1, 6)), np.zeros((N, 6))
+    gusts = active.gusts(t_int, seed)
     gust_loads = None
     if gusts is not None:  # unmeasured loads: through the flapping-response channel (linear)
         Fx_, _ = aero_matrices(vehicle)
@@ -334,26 +366,34 @@ def simulate_flight(
         F_int = F_int + gl
         F_mid = F_mid + 0.5 * (gl[1:] + gl[:-1])
         gust_loads = gl[::substeps]
-    xc, xo, ue = _integrate(vehicle, eff, t_int, u_int, F_int, F_mid, xc0, xo0, flapping)
+    xc, xo, aux = _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0,
+                             xo0, flapping)
     xc, xo = xc[::substeps], xo[::substeps]
     x = xc + xo
-    u_eff = ue[::substeps] if ue is not None else u_cmd
+    u_act = active.command(t, t, u_cmd)
+    u_act = u_cmd if u_act is None else u_act
+    u_eff = active.actuator(u_act, aux[::substeps]) if aux is not None else u_act
+    u_meas = active.measured(t, u_cmd)  # the commanded deflection as logged
 
     # --- true loads at the samples (what the EOM saw at each sample)
     phase = flap.phase(t)
     Fx, Fu = aero_matrices(vehicle)
     dF = x @ Fx.T + u_eff @ Fu.T
     F_tv = np.zeros((n, 6))
+    F_nom = flapping_loads(phase, vehicle) if flapping else F_tv
     if flapping:
-        gain = eff.flap_gain(xc)
-        F_tv = flapping_loads(phase, vehicle) * np.asarray(gain)[..., None]
-    extra = eff.extra_loads(xc, u_eff)
+        H = flapping_harmonics(phase, vehicle) if active.harmonics else (None, None)
+        F_tv = active.flapping(xc, u_eff, F_nom, *H) if active.has_flap else F_nom
+    extra = active.extra_loads(xc, u_eff, aux[::substeps] if aux is not None else xc[:, :0])
     dF = dF + F_tv + (0.0 if extra is None else extra)
     if gust_loads is not None:
         dF = dF + gust_loads
+    # what the paper's model misses at the true states and the measured input
+    dF_effect = dF - (x @ Fx.T + u_meas @ Fu.T + F_nom)
     load0 = np.array([trim[k + "0"] for k in FORCES])
     loads_true = {k: load0[i] + dF[:, i] for i, k in enumerate(FORCES)}
     loads_flap = {k: F_tv[:, i] for i, k in enumerate(FORCES)}
+    loads_effect = {k: dF_effect[:, i] for i, k in enumerate(FORCES)}
 
     # --- measurement
     clean = {"t": t}
@@ -365,7 +405,7 @@ def simulate_flight(
         if ripple:
             for hk, (frac, ph) in enumerate(RIPPLE[surf]):
                 d = d + frac * ref * np.sin((hk + 1) * phase + ph)
-        clean[surf] = d
+        clean[surf] = active.measured(t, d)
     clean["f"] = flap.f(t)
     nz = np.flatnonzero(np.abs(cmd) > 0)
     first = int(nz[0]) if nz.size else None
@@ -426,8 +466,10 @@ def simulate_flight(
         "clean": clean,
         "loads_true": loads_true,
         "loads_flap": loads_flap,
+        "loads_effect": loads_effect,
         "u_cmd": u_cmd,
         "u_eff": np.array(u_eff),
+        "u_meas": u_meas,
         "phase": phase,
         "flap": flap,
     }

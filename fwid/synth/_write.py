@@ -57,9 +57,10 @@ def write_flights(
     n_flights: int = 4,
     axis: str = "lon",
     seed: int = 0,
-    effect: str = "none",
-    strength: float = 1.0,
+    effect: str | tuple = "none",
+    strength: float | tuple = 1.0,
     truth_columns: bool = False,
+    form: str | tuple | None = None,
     **kw,
 ) -> list[Path]:
     """Simulate `n_flights` flights and write `lon_0.csv, lon_1.csv, ...` (or `lat_*`), their
@@ -71,7 +72,9 @@ def write_flights(
     simulation seed is drawn from the same generator. Any of `input`, `amplitude`, `start`
     or `seed`-independent options of `simulate_flight` given in `kw` (e.g. `noise`,
     `flapping`, `drift`, `duration`) apply to every flight. Deterministic by `seed`.
-    `truth_columns`: also write the exact loads (`write_csv`).
+    `truth_columns`: also write the exact loads (`write_csv`). `effect`, `strength`, `form`:
+    the unmodelled effect(s) and form(s) (`simulate_flight`); `vehicle` in `kw` (e.g.
+    `random_vehicle(seed)`) is simulated and written to `vehicle.json`.
 
     **Returns:** the CSV paths, in order.
     """
@@ -89,7 +92,8 @@ def write_flights(
         sim_seed = int(rng.integers(2**31 - 1))
         args = {"input": INPUT_CYCLE[i % len(INPUT_CYCLE)], "amplitude": amp, "start": start}
         args.update(kw)
-        flight = simulate_flight(axis=axis, seed=sim_seed, effect=effect, strength=strength, **args)
+        flight = simulate_flight(axis=axis, seed=sim_seed, effect=effect, strength=strength,
+                                 form=form, **args)
         csv = write_csv(out / f"{axis}_{i}.csv", flight, truth_columns)
         write_sidecar(csv.with_suffix(".json"), flight)
         paths.append(csv)

@@ -1,0 +1,147 @@
+"""Summary of `diagnosis_power.py` results: power vs strength per effect and flight count,
+false alarms on clean and out-of-catalogue flights, the confusion matrix, two-effect
+both-named rate (Markdown), and the power curves (PNG)."""
+
+from __future__ import annotations
+
+import platform
+from collections import Counter, defaultdict
+from pathlib import Path
+
+
+def right(r: dict) -> bool | None:
+    """Whether a case got the right answer (`None`: no answer, an error).
+
+    single: the verdict is the injected effect; clean / out of catalogue: `none`; pair: both
+    effects named (in `effects`, or the verdict and nothing else known when the result has
+    no `effects`)."""
+    if "verdict" not in r:
+        return None
+    if r["kind"] == "single":
+        return r["verdict"] == r["effect"]
+    if r["kind"] in ("clean", "out"):
+        return r["verdict"] == "none"
+    named = set(r.get("effects") or ([r["verdict"]] if r["verdict"] != "none" else []))
+    return set(r["effect"].split("+")) <= named
+
+
+def _frac(rows) -> str:
+    ok = [right(r) for r in rows if right(r) is not None]
+    return f"{sum(ok)}/{len(ok)}" if ok else "-"
+
+
+def _rate(rows) -> float | None:
+    ok = [right(r) for r in rows if right(r) is not None]
+    return sum(ok) / len(ok) if ok else None
+
+
+def power_table(results, by: str = "effect") -> list[str]:
+    """Rows (effect or effect/form) x flight count, columns strengths: right / cases."""
+    single = [r for r in results if r["kind"] == "single"]
+    strengths = sorted({r["strength"] for r in single})
+    key = (lambda r: r["effect"]) if by == "effect" else (lambda r: f"{r['effect']} / {r['form']}")
+    lines = [f"| {by} | flights | " + " | ".join(f"s={s:g}" for s in strengths) + " | all |",
+             "|---|---|" + "---:|" * (len(strengths) + 1)]
+    groups = defaultdict(list)
+    for r in single:
+        groups[(key(r), r["n"])].append(r)
+    for (k, n), rows in sorted(groups.items()):
+        cells = [_frac([r for r in rows if r["strength"] == s]) for s in strengths]
+        lines.append(f"| {k} | {n}+{n} | " + " | ".join(cells) + f" | {_frac(rows)} |")
+    return lines
+
+
+def confusion(results) -> list[str]:
+    verdicts = sorted({r["verdict"] for r in results if "verdict" in r} | {"none"})
+    rows = defaultdict(Counter)
+    for r in results:
+        if "verdict" in r and r["kind"] != "pair":
+            rows[r["effect"]][r["verdict"]] += 1
+    lines = ["| injected \\ verdict | " + " | ".join(verdicts) + " |",
+             "|---|" + "---:|" * len(verdicts)]
+    for e in sorted(rows):
+        lines.append(f"| {e} | " + " | ".join(str(rows[e].get(v, 0)) for v in verdicts) + " |")
+    return lines
+
+
+def false_alarms(results) -> list[str]:
+    lines = ["| injected | flights | false alarms | cases |", "|---|---|---:|---:|"]
+    null = [r for r in results if r["kind"] in ("clean", "out") and "verdict" in r]
+    for (e, n), rows in sorted(Counter((r["effect"], r["n"]) for r in null).items()):
+        rr = [r for r in null if r["effect"] == e and r["n"] == n]
+        lines.append(f"| {e} | {n}+{n} | {sum(r['verdict'] != 'none' for r in rr)} | {len(rr)} |")
+    tot = sum(r["verdict"] != "none" for r in null)
+    lines.append(f"| **all** | | {tot} | {len(null)} |")
+    return lines
+
+
+def pairs(results) -> list[str]:
+    rows = [r for r in results if r["kind"] == "pair" and "verdict" in r]
+    lines = ["| effects | forms | axis | verdict | effects named | both |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['effect']} | {r['form']} | {r['axis']} | {r['verdict']} | "
+                     f"{', '.join(r.get('effects') or []) or '-'} | {'yes' if right(r) else 'no'} |")
+    lines.append(f"\nBoth named: {_frac(rows)}.")
+    return lines
+
+
+def figure(results, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    single = [r for r in results if r["kind"] == "single"]
+    effects = sorted({r["effect"] for r in single})
+    if not effects:
+        return
+    fig, axs = plt.subplots(1, len(effects), figsize=(3.2 * len(effects), 3.3), sharey=True,
+                            squeeze=False)
+    counts = sorted({r["n"] for r in single})
+    strengths = sorted({r["strength"] for r in single})
+    for ax, e in zip(axs[0], effects):
+        for i, n in enumerate(counts):
+            rows = [r for r in single if r["effect"] == e and r["n"] == n]
+            ss = sorted({r["strength"] for r in rows})
+            ps = [_rate([r for r in rows if r["strength"] == s]) for s in ss]
+            pts = [(s, p) for s, p in zip(ss, ps) if p is not None]
+            if pts:
+                ax.plot(*zip(*pts), "o-", color=f"C{i}")
+        ax.set_xscale("log", base=2)
+        ax.set_xticks(strengths, [f"{s:g}" for s in strengths])
+        ax.set_title(e, fontsize=9)
+        ax.set_xlabel("strength")
+        ax.set_ylim(-0.05, 1.05)
+        ax.axhline(0.9, color="grey", lw=0.5, ls=":")
+    axs[0][0].set_ylabel("right verdict")
+    handles = [plt.Line2D([], [], color=f"C{i}", marker="o") for i in range(len(counts))]
+    fig.legend(handles, [f"{n}+{n} flights" for n in counts], loc="lower center",
+               ncol=len(counts), fontsize=8)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def summarise(results: list[dict], stem: Path, note: str = "") -> str:
+    """Write `stem.md` and `stem.png`; return the Markdown."""
+    stem = Path(stem)
+    errors = [r for r in results if "error" in r]
+    walls = sorted(r["wall_s"] for r in results if "wall_s" in r)
+    md = [f"# fwid diagnose: power on the randomised benchmark ({stem.name})", "",
+          f"{len(results)} cases ({len(errors)} without a verdict: "
+          f"{dict(Counter(r['error'].split(':')[0] for r in errors))}). {note}. "
+          f"Machine: {platform.platform()}.",
+          (f"Diagnosis wall time: median {walls[len(walls) // 2]:.1f} s, max {walls[-1]:.1f} s."
+           if walls else ""), "",
+          "Right verdict: the injected effect (single), `none` (clean, out of catalogue), both "
+          "effects in `effects` (pairs). Cells: right / cases.", "",
+          "## Power per effect", "", *power_table(results, "effect"), "",
+          "## Power per form", "", *power_table(results, "form"), "",
+          "## False alarms (clean and out-of-catalogue flights)", "", *false_alarms(results), "",
+          "## Confusion matrix (single effects, clean, out of catalogue)", "", *confusion(results),
+          "", "## Two effects at once", "", *pairs(results), "",
+          f"![power curves]({stem.name}.png)", ""]
+    text = "\n".join(md)
+    stem.with_suffix(".md").write_text(text)
+    figure(results, stem.with_suffix(".png"))
+    return text

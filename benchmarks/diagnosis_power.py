@@ -1,0 +1,219 @@
+"""Power of `fwid.diagnose` on a randomised benchmark that cannot be passed by tuning (issue 12).
+
+Cases (built deterministically by `cases(half)`):
+
+- every catalogue effect x form x strength {0.25, 0.5, 1, 2} x flights {4+4, 6+6, 8+8};
+- clean flights (`none`, 4 per flight count) and the out-of-catalogue effects (`turbulence`,
+  `unsteady-aero`, `sensor-offset`) at strengths {1, 2} x flight counts: the right verdict is
+  `none`;
+- every pair of catalogue effects at strength 1 with 6+6 flights, forms drawn from the half:
+  both should be in the result's `effects`.
+
+Each case draws, from its own generator: a randomised vehicle (`fwid.synth.random_vehicle`,
+every derivative and Fourier coefficient within +-30 %, stable; the same for all its training
+and test flights), a noise scale U(0.5, 2), a flight length U(2.5, 8) s, a sample rate from
+{100, 200, 300, 500} Hz, the input (the 3211/doublet/211/pulse cycle of `write_flights`, or
+one of them for every flight) and the axis (among those whose manoeuvre shows the form).
+
+**Split**: forms of even index (0, 2) with even seeds are the `dev` half, forms of odd index
+(1, 3) with odd seeds the `heldout` half; clean and out-of-catalogue cases split by seed
+parity. Choose thresholds on `dev`, report `heldout` only.
+
+Per case: write the flights blind (sidecars deleted, `diagnosis._write`), `fwid.diagnose`,
+one JSON line in `results/diagnosis_power_{half}.jsonl`; then the summary
+`diagnosis_power_{half}.md` and the power curves `diagnosis_power_{half}.png`
+(`_power_summary.py`).
+
+    python benchmarks/diagnosis_power.py --half dev [--seeds 2] [--workers 1] [--limit N]
+        [--subset kind=single effect=flap-coupling ...] [--out benchmarks/results]
+    python benchmarks/diagnosis_power.py --summarise benchmarks/results/diagnosis_power_dev.jsonl
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import multiprocessing as mp
+import sys
+import tempfile
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's fwid first
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+STRENGTHS = (0.25, 0.5, 1.0, 2.0)
+COUNTS = (4, 6, 8)
+OOC_STRENGTHS = (1.0, 2.0)
+CLEAN_PER_COUNT = 4
+PAIR_COUNT = 6
+RATES = (100.0, 200.0, 300.0, 500.0)
+INPUTS = ("cycle", "3211", "211", "doublet", "pulse")
+HALVES = ("dev", "heldout")
+
+
+def _rng(case_key: str, seed: int):
+    return np.random.default_rng([seed, zlib.crc32(case_key.encode())])
+
+
+def _draw(case: dict, rng) -> dict:
+    """The case's random conditions (vehicle seed, noise, length, rate, input)."""
+    case["vehicle_seed"] = int(rng.integers(2**31 - 1))
+    case["noise"] = float(rng.uniform(0.5, 2.0))
+    case["duration"] = float(rng.uniform(2.5, 8.0))
+    case["rate"] = float(rng.choice(RATES))
+    case["input"] = str(rng.choice(INPUTS))
+    return case
+
+
+def cases(half: str = "dev", seeds: int = 2) -> list[dict]:
+    """The cases of `half`, in a fixed shuffled order (so `--limit` takes a mixed slice)."""
+    from fwid.synth import EFFECTS, FORMS, OUT_OF_CATALOGUE, form_axes
+
+    parity = HALVES.index(half)
+    catalogue = EFFECTS[1:]
+    forms = {e: [f for i, f in enumerate(FORMS[e]) if i % 2 == parity] for e in catalogue}
+    out = []
+
+    def add(kind, effect, form, strength, n, seed, rep=0):
+        key = f"{kind}|{effect}|{form}|{strength}|{n}|{seed}|{rep}"
+        rng = _rng(key, seed)
+        names, fnames = effect.split("+"), form.split("+")
+        axes = [a for a in ("lon", "lat")
+                if all(a in form_axes(e, f) for e, f in zip(names, fnames))]
+        case = {"kind": kind, "effect": effect, "form": form, "strength": strength,
+                "n": n, "seed": seed, "rep": rep, "axis": str(rng.choice(axes))}
+        out.append(_draw(case, rng))
+
+    for seed in range(parity, 2 * seeds, 2):
+        for e in catalogue:
+            for f, s, n in itertools.product(forms[e], STRENGTHS, COUNTS):
+                add("single", e, f, s, n, seed)
+        for n, rep in itertools.product(COUNTS, range(CLEAN_PER_COUNT)):
+            add("clean", "none", "none", 0.0, n, seed, rep)
+        for e, s, n in itertools.product(OUT_OF_CATALOGUE, OOC_STRENGTHS, COUNTS):
+            add("out", e, FORMS[e][0], s, n, seed)
+        for a, b in itertools.combinations(catalogue, 2):
+            rng = _rng(f"pair|{a}|{b}|{seed}", seed)
+            pairs = [(fa, fb) for fa in forms[a] for fb in forms[b]
+                     if set(form_axes(a, fa)) & set(form_axes(b, fb))]
+            fa, fb = pairs[int(rng.integers(len(pairs)))]
+            add("pair", f"{a}+{b}", f"{fa}+{fb}", 1.0, PAIR_COUNT, seed)
+    order = np.random.default_rng(12 + parity).permutation(len(out))
+    return [out[i] for i in order]
+
+
+def select(all_cases: list[dict], subset: list[str], limit: int | None) -> list[dict]:
+    """`subset`: `key=value[,value]` filters on case fields (all must hold); then the first
+    `limit` cases."""
+    for cond in subset:
+        key, _, vals = cond.partition("=")
+        allowed = set(vals.split(","))
+        all_cases = [c for c in all_cases if str(c.get(key)) in allowed
+                     or (key == "effect" and allowed & set(c["effect"].split("+")))]
+    return all_cases[:limit] if limit else all_cases
+
+
+def _record_candidates(diag) -> list[dict]:
+    out = []
+    for c in getattr(diag, "candidates", []) or []:
+        rec = {k: c.get(k) for k in ("effect", "significant", "p", "confidence", "shrink_pct")
+               if k in c}
+        out.append(rec)
+    return out
+
+
+def run_case(case: dict) -> dict:
+    """Simulate, diagnose and score one case (errors are recorded, not raised)."""
+    import fwid
+    from diagnosis import _write
+    from fwid.synth import effect_noise_ratio, random_vehicle
+
+    rec = dict(case)
+    vehicle = random_vehicle(case["vehicle_seed"])
+    kw = {"form": case["form"], "vehicle": vehicle, "noise": case["noise"],
+          "duration": case["duration"], "rate": case["rate"]}
+    if case["input"] != "cycle":
+        kw["input"] = case["input"]
+    effect = case["effect"]
+    try:
+        if effect != "none":
+            r = effect_noise_ratio(effect, case["form"], case["strength"], (case["axis"],),
+                                   vehicle=vehicle)
+            rec["noise_ratio"] = r["max"]
+        with tempfile.TemporaryDirectory() as d:
+            base = zlib.crc32(json.dumps(case, sort_keys=True).encode())  # flight seeds
+            _write(f"{d}/train", case["n"], case["axis"], base, effect, case["strength"], **kw)
+            _write(f"{d}/test", case["n"], case["axis"], base + 500, effect, case["strength"], **kw)
+            train, test = fwid.load_flights(f"{d}/train"), fwid.load_flights(f"{d}/test")
+        cols = ("q", "u", "w", "p", "r", "v", "X", "Z", "M", "Y", "L", "N")
+        if not all(np.all(np.isfinite(np.asarray(f[c]))) for f in train + test for c in cols):
+            rec["error"] = "diverged"  # e.g. the quadratic nonlinear-aero at strength 2
+            return rec
+        t0 = time.perf_counter()
+        diag = fwid.diagnose(train, test, axis=case["axis"])
+        rec["wall_s"] = time.perf_counter() - t0
+    except Exception as exc:  # noqa: BLE001 - a benchmark records, it does not stop
+        rec["error"] = f"{type(exc).__name__}: {exc}"
+        return rec
+    rec["verdict"] = diag.verdict
+    effects = getattr(diag, "effects", None)
+    if effects is not None:
+        rec["effects"] = [e if isinstance(e, str) else e.get("effect") for e in effects]
+        rec["effects_detail"] = [e for e in effects if isinstance(e, dict)]
+    rec["candidates"] = _record_candidates(diag)
+    v = diag.candidate(diag.verdict) if diag.verdict != "none" else None
+    rec["shrink_pct"] = v.get("shrink_pct") if v else None
+    return rec
+
+
+def main(argv=None):
+    from _power_summary import summarise
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--half", choices=HALVES, default="dev")
+    ap.add_argument("--seeds", type=int, default=2, help="seeds per half")
+    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--limit", type=int, default=None, help="run only the first N cases")
+    ap.add_argument("--subset", nargs="*", default=[], help="filters key=value[,value]")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    ap.add_argument("--list", action="store_true", help="print the cases and stop")
+    ap.add_argument("--summarise", metavar="FILE.jsonl", help="only rewrite the summary")
+    args = ap.parse_args(argv)
+
+    if args.summarise:
+        path = Path(args.summarise)
+        results = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        summarise(results, path.with_suffix(""), note=f"recomputed from {path.name}")
+        return
+    todo = select(cases(args.half, args.seeds), args.subset, args.limit)
+    if args.list:
+        for c in todo:
+            print(json.dumps(c))
+        print(f"{len(todo)} cases", file=sys.stderr)
+        return
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = out / f"diagnosis_power_{args.half}"
+    t0 = time.perf_counter()
+    results = []
+    with open(stem.with_suffix(".jsonl"), "w") as fh, \
+            mp.get_context("spawn").Pool(args.workers) as pool:
+        for i, r in enumerate(pool.imap_unordered(run_case, todo), 1):
+            results.append(r)
+            fh.write(json.dumps(r) + "\n")
+            fh.flush()
+            print(f"[{i}/{len(todo)}] {r['kind']} {r['effect']}/{r['form']} s={r['strength']:g} "
+                  f"{r['n']}+{r['n']} {r['axis']}: {r.get('verdict', r.get('error'))} "
+                  f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s)", flush=True)
+    cmd = "python benchmarks/diagnosis_power.py " + " ".join(sys.argv[1:] if argv is None else argv)
+    summarise(results, stem, note=f"`{cmd}`, {args.workers} worker(s), "
+              f"{time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()

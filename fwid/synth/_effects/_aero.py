@@ -1,0 +1,115 @@
+"""Forms of `nonlinear-aero` (in the catalogue) and of `unsteady-aero` (outside it).
+
+`nonlinear-aero`: extra cycle-averaged loads, nonlinear in the perturbation states; every
+form has longitudinal terms (from lon states, on X Z M) and lateral ones (from lat states,
+on Y L N), so a flight of either axis shows it. `s` is the strength.
+
+- `quadratic` (default, index 0): `dX = s cx du^2`, `dZ = s cz dw|dw|`, `dM = s cm dw|dw|`,
+  `dY = s cy dv|dv|`, `dN = s cn dv|dv|`.
+- `cubic` (1), stall-like (the lift slope falls off at large incidence): `dX = s cx du^3`,
+  `dZ = s cz dw^3`, `dM = s cm dw^3`, `dY = s cy dv^3`, `dL = s cl dv^3`, `dN = s cn dv^3`.
+- `rate-damping` (2), quadratic damping: `dZ = s cz dq|dq|`, `dM = s cm dq|dq|`,
+  `dL = s cl dp|dp|`, `dN = s cn dr|dr|`, `dY = s cy dr|dr|`.
+- `cross` (3), products of the two states other than the one each load mainly drives (so
+  no term changes its own load's damping or stiffness, which keeps the vehicle stable):
+  `dX = s cx dw dq`, `dZ = s cz du dq`, `dM = s cm du dw`, `dY = s cy dp dr`,
+  `dL = s cl dv dr`, `dN = s cn dv dp`.
+
+`unsteady-aero` (`state-lag`): part of the state-dependent cycle-averaged aerodynamic loads
+(Eqs. 1-6) follows the states through a first-order lag (a lagging wake):
+`dF = Fx (xc + W (xl - xc)) + Fu u`, `xl' = (xc - xl) / tau`, `tau` = 0.075 s fixed, `W`
+diagonal with `s wlon` on q, u, w and `s wlat` on p, r, v (the lagging fraction; the
+lateral one smaller because the fast roll mode makes any lag there much stronger).
+Implemented as the extra load `Fx W (xl - xc)`. Not in the catalogue: no catalogue form
+adds loads lagging the states.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._delfly import aero_matrices
+from ._form import Form, loads
+
+
+def _sq(x):
+    return x * np.abs(x)
+
+
+class Quadratic(Form):
+    effect, name = "nonlinear-aero", "quadratic"
+    COEFFICIENTS = {"cx": -0.15, "cz": -0.25, "cm": 6.0e-3, "cy": -0.08, "cn": -1.5e-3}
+
+    def extra_loads(self, xc, u, aux):
+        c = self.c
+        du, dw, dv = xc[..., 1], xc[..., 2], xc[..., 6]
+        return loads(np.shape(xc)[:-1], X=c["cx"] * du * du, Z=c["cz"] * dw * np.abs(dw),
+                     M=c["cm"] * dw * np.abs(dw), Y=c["cy"] * dv * np.abs(dv),
+                     N=c["cn"] * dv * np.abs(dv))
+
+
+class Cubic(Form):
+    effect, name = "nonlinear-aero", "cubic"
+    COEFFICIENTS = {"cx": -0.84, "cz": -5.9, "cm": -0.27, "cy": -0.27, "cl": -4.1e-5, "cn": -4.5e-3}
+
+    def extra_loads(self, xc, u, aux):
+        c = self.c
+        du3, dw3, dv3 = xc[..., 1] ** 3, xc[..., 2] ** 3, xc[..., 6] ** 3
+        return loads(np.shape(xc)[:-1], X=c["cx"] * du3, Z=c["cz"] * dw3, M=c["cm"] * dw3,
+                     Y=c["cy"] * dv3, L=c["cl"] * dv3, N=c["cn"] * dv3)
+
+
+class RateDamping(Form):
+    effect, name = "nonlinear-aero", "rate-damping"
+    COEFFICIENTS = {"cz": -0.016, "cm": -7.6e-4, "cl": -2.7e-7, "cn": -7.6e-4, "cy": -4.0e-3}
+
+    def extra_loads(self, xc, u, aux):
+        c = self.c
+        qq, pp, rr = _sq(xc[..., 0]), _sq(xc[..., 4]), _sq(xc[..., 5])
+        return loads(np.shape(xc)[:-1], Z=c["cz"] * qq, M=c["cm"] * qq, L=c["cl"] * pp,
+                     N=c["cn"] * rr, Y=c["cy"] * rr)
+
+
+class Cross(Form):
+    effect, name = "nonlinear-aero", "cross"
+    COEFFICIENTS = {"cx": -0.025, "cz": -0.08, "cm": 0.022, "cy": -7.6e-3, "cl": 1.2e-5,
+                    "cn": -1.8e-4}
+
+    def extra_loads(self, xc, u, aux):
+        c = self.c
+        dq, du, dw, dp, dr, dv = (xc[..., i] for i in (0, 1, 2, 4, 5, 6))
+        return loads(np.shape(xc)[:-1], X=c["cx"] * dw * dq, Z=c["cz"] * du * dq,
+                     M=c["cm"] * du * dw, Y=c["cy"] * dp * dr, L=c["cl"] * dv * dr,
+                     N=c["cn"] * dv * dp)
+
+
+NONLINEAR = (Quadratic, Cubic, RateDamping, Cross)
+
+
+class StateLag(Form):
+    effect, name = "unsteady-aero", "state-lag"
+    COEFFICIENTS = {"tau": 0.075, "lon": 0.5, "lat": 0.15}
+    n_aux = 9
+
+    @classmethod
+    def coefficients(cls, strength):
+        c = cls.COEFFICIENTS
+        return {"tau": c["tau"], "lon": c["lon"] * strength, "lat": c["lat"] * strength}
+
+    def __init__(self, strength, vehicle):
+        super().__init__(strength, vehicle)
+        w = np.zeros(9)
+        w[:3], w[4:7] = self.c["lon"], self.c["lat"]  # q u w; p r v
+        self._wFx = aero_matrices(vehicle)[0] * w  # columns of Fx weighted by the fractions
+
+    def aux0(self, xc0):
+        return np.array(xc0, dtype=float)
+
+    def aux_rhs(self, xc, u_cmd, u, aux):
+        return (xc - aux) / self.c["tau"]
+
+    def extra_loads(self, xc, u, aux):
+        return (aux - xc) @ self._wFx.T
+
+
+UNSTEADY = (StateLag,)

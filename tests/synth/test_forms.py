@@ -1,0 +1,189 @@
+"""Forms of the injected effects, two effects at once, the strength yardstick and randomised
+vehicles."""
+
+import numpy as np
+import pytest
+
+from fwid.synth import (
+    DELFLY,
+    EFFECTS,
+    FORMS,
+    OUT_OF_CATALOGUE,
+    RANDOM_PARAMS,
+    Effect,
+    effect_noise_ratio,
+    form_axes,
+    random_vehicle,
+    simulate_flight,
+)
+
+LON, LAT = ("X", "Z", "M"), ("Y", "L", "N")
+ALL_FORMS = [(e, f) for e in EFFECTS[1:] + OUT_OF_CATALOGUE for f in FORMS[e]]
+SHORT = {"duration": 2.5, "input": "doublet"}
+
+
+def _columns(fl):
+    return {k: v for k, v in fl.items() if k != "meta"}
+
+
+@pytest.fixture(scope="module")
+def base():
+    return {ax: simulate_flight(axis=ax, seed=4, noise=0.0, **SHORT) for ax in ("lon", "lat")}
+
+
+def test_every_effect_has_at_least_four_forms():
+    for e in EFFECTS[1:]:
+        assert len(FORMS[e]) >= 4, e
+    assert set(OUT_OF_CATALOGUE) == {"turbulence", "unsteady-aero", "sensor-offset"}
+    assert Effect("flap-coupling").form == "amplitude"  # the default is the original form
+    with pytest.raises(ValueError):
+        Effect("flap-coupling", form="wobble")
+
+
+@pytest.mark.parametrize("effect,form", ALL_FORMS)
+def test_form_at_zero_strength_is_none(effect, form):
+    none = simulate_flight(axis="lon", seed=1, **SHORT)
+    off = simulate_flight(axis="lon", seed=1, effect=effect, form=form, strength=0.0, **SHORT)
+    for c, v in _columns(none).items():
+        np.testing.assert_array_equal(v, off[c])
+
+
+def _dload(base, on, load):
+    return np.max(np.abs(on["meta"]["loads_true"][load] - base["meta"]["loads_true"][load]))
+
+
+@pytest.mark.parametrize("effect,form", ALL_FORMS)
+def test_form_changes_the_flight_on_its_axes(effect, form, base):
+    for ax in form_axes(effect, form):
+        on = simulate_flight(axis=ax, seed=4, noise=0.0, effect=effect, form=form, **SHORT)
+        ref = np.max(np.abs(on["meta"]["loads_effect"]["M" if ax == "lon" else "L"]))
+        eff = max(np.std(v) for v in on["meta"]["loads_effect"].values())
+        assert eff > 0 and np.isfinite(ref), (ax, eff)
+        if effect == "sensor-offset":
+            assert np.max(np.abs(on["de"] - base[ax]["de"]) + np.abs(on["dr"] - base[ax]["dr"])) > 0
+        else:
+            assert max(_dload(base[ax], on, k) for k in LON + LAT) > 0
+        assert on["meta"]["truth"]["form"] == form
+
+
+@pytest.mark.parametrize("form,ax,hit,untouched", [
+    ("lat-to-lon", "lat", LON, ()),
+    ("lon-to-lat", "lon", LAT, LON),
+    ("rates", "lon", LAT, ()),
+])
+def test_lon_lat_coupling_direction(form, ax, hit, untouched, base):
+    """Each direction hits the other axis's loads; a manoeuvre the form does not show on
+    gives the flight without the effect."""
+    on = simulate_flight(axis=ax, seed=4, noise=0.0, effect="lon-lat-coupling", form=form, **SHORT)
+    extra = on["meta"]["loads_effect"]
+    for k in hit:
+        assert np.std(extra[k]) > 0, k
+    other = "lat" if ax == "lon" else "lon"
+    off = simulate_flight(axis=other, seed=4, noise=0.0, effect="lon-lat-coupling", form=form,
+                          **SHORT)
+    assert form_axes("lon-lat-coupling", form) == (ax,)
+    for c, v in _columns(base[other]).items():
+        np.testing.assert_array_equal(v, off[c])
+    # lat-to-lon in a lat flight leaves the lateral loads' effect part at zero, and so on
+    for k in LAT if form == "lat-to-lon" else LON:
+        assert np.max(np.abs(extra[k])) < 1e-12 * max(1.0, np.max(np.abs(extra[hit[0]]))), k
+
+
+@pytest.mark.parametrize("form", FORMS["nonlinear-aero"])
+def test_nonlinear_aero_acts_on_both_axes(form, base):
+    for ax, loads in (("lon", LON), ("lat", LAT)):
+        on = simulate_flight(axis=ax, seed=4, noise=0.0, effect="nonlinear-aero", form=form,
+                             **SHORT)
+        assert max(np.std(on["meta"]["loads_effect"][k]) for k in loads) > 1e-5, (ax, form)
+
+
+def test_flap_coupling_forms_act_on_the_flapping_band(base):
+    for form in FORMS["flap-coupling"]:
+        on = simulate_flight(axis="lon", seed=4, noise=0.0, effect="flap-coupling", form=form,
+                             **SHORT)
+        d = on["meta"]["loads_flap"]["M"] - base["lon"]["meta"]["loads_flap"]["M"]
+        assert np.std(d) > 0.05 * np.std(base["lon"]["meta"]["loads_flap"]["M"]), form
+    # shape leaves the fundamental alone: at zero u, w, v, r it changes nothing
+    from fwid.synth._effects._flapping import Shape
+
+    F, H, Q = np.ones(6), np.ones((3, 6)), np.zeros((3, 6))
+    np.testing.assert_array_equal(Shape(1.0, DELFLY).flapping(np.zeros(9), np.zeros(2), F, H, Q), F)
+
+
+def test_actuator_forms_lag_the_command_and_keep_the_measured_column():
+    kw = {"axis": "lon", "noise": 0.0, "input": "pulse", "unit": 1.0, "amplitude": 0.1,
+          "ripple": False}
+    for form in FORMS["actuator-dynamics"]:
+        fl = simulate_flight(effect="actuator-dynamics", form=form, **kw)
+        m = fl["meta"]
+        k0 = m["first_input"]
+        ue, uc = m["u_eff"][:, 0], m["u_cmd"][:, 0]
+        assert np.all(ue[:k0] == 0.0)
+        assert ue[k0 + 1] < uc[k0 + 1] - 1e-3, form  # lags right after the step
+        assert abs(ue[k0 + 150] - uc[k0 + 150]) < 2e-3, form  # and settles
+        np.testing.assert_allclose(fl["de"] - m["trim"]["de0"], uc, atol=1e-15)
+    d = simulate_flight(effect="actuator-dynamics", form="delay", **kw)["meta"]
+    T = Effect("actuator-dynamics", form="delay").coefficients()["delay"]
+    n = round(T * 200)
+    np.testing.assert_allclose(d["u_eff"][n:, 0], d["u_cmd"][:-n, 0], atol=1e-12)
+
+
+def test_sensor_offset_shifts_the_measured_control_the_other_way():
+    """The logged column trails the true deflection, so the response LEADS it."""
+    kw = {"axis": "lon", "noise": 0.0, "input": "pulse", "unit": 1.0, "amplitude": 0.1,
+          "ripple": False}
+    base = simulate_flight(**kw)
+    fl = simulate_flight(effect="sensor-offset", **kw)
+    T = Effect("sensor-offset").coefficients()["offset"]
+    n = round(T * 200)
+    np.testing.assert_allclose(fl["de"][n:], base["de"][:-n], atol=1e-12)
+    np.testing.assert_array_equal(fl["meta"]["u_eff"], base["meta"]["u_eff"])  # acts at once
+    np.testing.assert_array_equal(fl["q"], base["q"])  # the motion is that of no effect
+    k0 = base["meta"]["first_input"]
+    assert fl["de"][k0 + n - 1] == base["de"][0] and base["de"][k0 + 1] > base["de"][0]
+
+
+def test_two_effects_compose():
+    a = simulate_flight(seed=2, noise=0.0, effect="flap-coupling", form="control", **SHORT)
+    b = simulate_flight(seed=2, noise=0.0, effect="actuator-dynamics", form="delay", **SHORT)
+    ab = simulate_flight(seed=2, noise=0.0, effect=("flap-coupling", "actuator-dynamics"),
+                         form=("control", "delay"), **SHORT)
+    same = simulate_flight(seed=2, noise=0.0, effect="flap-coupling+actuator-dynamics",
+                           form="control+delay", **SHORT)
+    np.testing.assert_array_equal(ab["q"], same["q"])
+    np.testing.assert_array_equal(ab["meta"]["u_eff"], b["meta"]["u_eff"])  # the delay acts
+    assert not np.array_equal(ab["meta"]["loads_flap"]["M"], b["meta"]["loads_flap"]["M"])
+    assert not np.array_equal(ab["q"], a["q"])
+    t = ab["meta"]["truth"]
+    assert t["effect"] == "flap-coupling+actuator-dynamics" and t["form"] == "control+delay"
+    assert set(t["effect_coefficients"]) == {"flap-coupling", "actuator-dynamics"}
+    # one part at strength 0 is the other alone
+    half = simulate_flight(seed=2, noise=0.0, effect=("flap-coupling", "actuator-dynamics"),
+                           form=("control", "delay"), strength=(1.0, 0.0), **SHORT)
+    np.testing.assert_array_equal(half["q"], a["q"])
+    with pytest.raises(ValueError):
+        Effect(("flap-coupling", "flap-coupling"))
+    with pytest.raises(ValueError):
+        Effect(("flap-coupling", "actuator-dynamics"), form=("control",))
+
+
+def test_effect_noise_ratio_sizes_strength_one():
+    """Strength 1 is about as strong as the noise on its loads (banded yardstick)."""
+    for e, f in (("flap-coupling", "phase"), ("nonlinear-aero", "cubic"),
+                 ("lon-lat-coupling", "lon-to-lat")):
+        r = effect_noise_ratio(e, f)  # the default manoeuvre: 3211, 4.5 s, 200 Hz
+        assert 0.7 < r["max"] < 2.0, (e, f, r["max"])
+    none = effect_noise_ratio("nonlinear-aero", strength=0.0, axes=("lon",), duration=3.0)
+    assert none["max"] < 1e-6
+
+
+def test_random_vehicle_is_stable_within_spread_and_deterministic():
+    for seed in range(20):
+        v = random_vehicle(seed)
+        for a in ("lon", "lat"):
+            assert np.max(v.eigenvalues(a).real) < 0
+        ratio = np.array([getattr(v, k) / getattr(DELFLY, k) for k in RANDOM_PARAMS])
+        assert np.all((ratio >= 0.7 - 1e-12) & (ratio <= 1.3 + 1e-12))
+        assert v.mass == DELFLY.mass and v.theta0 == DELFLY.theta0
+    assert random_vehicle(3) == random_vehicle(3) and random_vehicle(3) != random_vehicle(4)
+    assert random_vehicle(5, spread=0.0) == DELFLY
