@@ -151,3 +151,12 @@ def test_coloured_correlated_residuals_say_model_error_and_auto_uses_a_diagonal_
     assert any("model error, not measurement noise" in m for m in caught), caught
     assert any("strongly coloured" in m and "process noise or a missing effect" in m
                and "y1 and y2" in m for m in caught), caught
+
+
+def test_least_squares_start_of_a_model_with_h_says_it_keeps_the_nominal_values():
+    model = _simple(h=lambda x, u, p, c: jnp.stack([x[0], 2.0 * x[0]]), outputs=("y1", "y2"),
+                    name="twice")
+    z = _data(model.with_params(a=3.0, b=2.0), ny=2)
+    _, caught = _fit(model, z)  # start="least-squares", the default
+    assert any(m.startswith("twice: the least-squares start keeps the nominal values of a, b")
+               for m in caught), caught
