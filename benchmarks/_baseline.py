@@ -35,6 +35,9 @@ def rk4_simulate(f, theta, t, u, x0):
     ``t`` (N,), ``u`` (N, nu) or (N,), ``x0`` (nx,).  The step is t[k+1]-t[k]; the input is
     u[k] at the start of the step, u[k+1] at the end and their mean at the half step.
     Returns the states at the sample times, shape (N, nx), with X[0] = x0.
+
+    Batched: with ``x0`` of shape (P, nx) (and an ``f`` that broadcasts over the leading
+    axis, e.g. P parameter sets at once) it returns (N, P, nx).
     """
     t = np.asarray(t, dtype=float)
     u = np.asarray(u, dtype=float)
@@ -42,7 +45,7 @@ def rk4_simulate(f, theta, t, u, x0):
         u = u[:, None]
     x = np.array(x0, dtype=float)
     n = t.shape[0]
-    X = np.empty((n, x.shape[0]))
+    X = np.empty((n, *x.shape))
     X[0] = x
     for k in range(n - 1):
         h = t[k + 1] - t[k]
@@ -97,6 +100,7 @@ def fit_output_error(
     max_outer=50,
     method="trf",
     verbose=False,
+    batch=None,
 ):
     """Output-error ML fit of ``theta`` to one or more experiments.
 
@@ -112,6 +116,11 @@ def fit_output_error(
         default False: the full residual covariance of Eq. (11).
     rtol : stop when the relative change of the cost between relaxation steps is below this.
     method : scipy least_squares method ('trf' or 'lm').
+    batch : optional ``batch(thetas) -> Y``: the outputs of all experiments, concatenated in
+        time, for P full parameter vectors at once, ``thetas`` (P, n_par) -> (P, N, ny). When
+        given it replaces ``f``, ``h``, ``t_list``, ``u_list`` and ``x0_list`` (pass ``None``
+        for those), and the forward-difference Jacobian (step ``sqrt(eps) max(1, |p|)``,
+        scipy's) costs one batched simulation instead of one per parameter.
 
     Returns
     -------
@@ -128,11 +137,13 @@ def fit_output_error(
     else:
         free = np.asarray(free)
         idx = np.flatnonzero(free) if free.dtype == bool else free.astype(int)
-    data = [
-        (np.asarray(t, float), np.asarray(u, float), np.asarray(z, float), np.asarray(x0, float))
-        for t, u, z, x0 in zip(t_list, u_list, z_list, x0_list)
-    ]
-    z_all = np.concatenate([d[2] for d in data], axis=0)
+    if batch is None:
+        data = [
+            (np.asarray(t, float), np.asarray(u, float), np.asarray(z, float),
+             np.asarray(x0, float))
+            for t, u, z, x0 in zip(t_list, u_list, z_list, x0_list)
+        ]
+    z_all = np.concatenate([np.asarray(z, float) for z in z_list], axis=0)
     n_samples = z_all.shape[0]
 
     counter = {"sims": 0}
@@ -145,8 +156,20 @@ def fit_output_error(
     def residual_matrix(p):
         th = full_theta(p)
         counter["sims"] += 1
+        if batch is not None:
+            return z_all - batch(th[None])[0]
         Y = np.concatenate([_outputs(f, h, th, t, u, x0) for t, u, _, x0 in data], axis=0)
         return z_all - Y
+
+    def batched_jacobian(p, L_inv):
+        """d(whitened residual)/dp by forward differences, all parameters in one call."""
+        steps = np.sqrt(np.finfo(float).eps) * np.maximum(1.0, np.abs(p))
+        P = np.repeat(full_theta(p)[None], len(idx) + 1, axis=0)
+        P[np.arange(1, len(idx) + 1), idx] += steps
+        counter["sims"] += len(idx) + 1
+        Y = batch(P)
+        dE = -(Y[1:] - Y[0]) / steps[:, None, None]  # (p, N, ny)
+        return np.einsum("pkj,ij->kip", dE, L_inv).reshape(-1, len(idx))
 
     p = theta0[idx].copy()
     E = residual_matrix(p)
@@ -168,7 +191,8 @@ def fit_output_error(
                 return np.full(E_.size, 1e10)
             return (E_ @ L_inv.T).ravel()
 
-        res = least_squares(whitened, p, method=method, jac="2-point")
+        jac = "2-point" if batch is None else (lambda p_, L_inv=L_inv: batched_jacobian(p_, L_inv))
+        res = least_squares(whitened, p, method=method, jac=jac)
         n_inner += res.nfev
         p = res.x
         E = residual_matrix(p)
@@ -211,3 +235,24 @@ def fit_output_error(
         "fisher": F,
         "wall_s": time.perf_counter() - t_wall,
     }
+
+
+def batch_of(xdot, obs, names, t_list, u_list, x0_list, consts_list=None):
+    """The ``batch`` argument of [`fit_output_error`][] for a model written once for numpy
+    and JAX alike: ``xdot(x, u, p, c, xp)`` and ``obs(x, u, p, c, xp)`` index the state and
+    input components with ``x[..., i]`` and return ``xp.stack([...], axis=-1)``; ``p`` maps
+    ``names`` to values, here arrays over the P parameter vectors. RK4 as
+    [`rk4_simulate`][], all P vectors in one loop over the samples."""
+    consts_list = consts_list or [{} for _ in t_list]
+
+    def batch(thetas):
+        p = {k: thetas[:, i] for i, k in enumerate(names)}
+        out = []
+        for t, u, x0, c in zip(t_list, u_list, x0_list, consts_list):
+            u = np.asarray(u, float).reshape(len(t), -1)
+            x0s = np.broadcast_to(np.asarray(x0, float), (thetas.shape[0], len(x0)))
+            X = rk4_simulate(lambda x, uu, _: xdot(x, uu, p, c, np), None, t, u, x0s)
+            out.append(obs(X, u[:, None, :], p, c, np))  # (N, P, ny)
+        return np.concatenate(out, axis=0).transpose(1, 0, 2)
+
+    return batch

@@ -2,10 +2,16 @@
 
 A full R (Eq. 11) lets the outputs' noise be correlated; when the outputs are nearly linearly
 dependent (or one is nearly noise-free) it goes singular and the likelihood wanders off to a
-spurious optimum, where a diagonal R (as in FVSysID and SIDPAC) does not. `noise="auto"` (the
-default of [`fwid.fit`][]) fits with a full R and falls back to a diagonal R when the full
-fit did not converge, diverged, or ended with an ill-conditioned R; `FitResult.noise` says
-which R the estimates belong to.
+spurious optimum, where a diagonal R (as in FVSysID and SIDPAC) does not. Likewise when
+model error rather than measurement noise makes the residuals (coloured, and correlated
+between outputs): a full R then weights the outputs by the model error, and the estimates
+move by several standard deviations from the diagonal-R ones that the textbooks publish
+(FVSysID TC01: 2.3 sd; TC04 and SIDPAC's Twin Otter do not converge in 60 steps and end up
+to 6 sd away; see `benchmarks/textbook_cases.py`). `noise="auto"` (the default of
+[`fwid.fit`][]) fits with a full R and falls back to a diagonal R when the full fit did not
+converge, diverged, ended with an ill-conditioned R, or ended with residuals that carry the
+mark of model error ([`model_error_signature`][]); `FitResult.noise` says which R the
+estimates belong to.
 """
 
 from __future__ import annotations
@@ -16,7 +22,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .._errors import FitDivergedError
-from ._warnings import R_COND_MAX, r_condition
+from ._warnings import R_COND_MAX, model_error_signature, r_condition
 
 NOISE_MODELS = ("auto", "full", "diagonal")
 
@@ -36,6 +42,12 @@ def full_r_trouble(result) -> str | None:
     cond = r_condition(result.R)
     if cond > R_COND_MAX:
         return f"ended with an ill-conditioned R (condition number {cond:.3g})"
+    mark = model_error_signature(result)
+    if mark is not None:
+        lag1, _, a, b, c = mark
+        return (f"ended with residuals that model error, not measurement noise, makes "
+                f"(lag-1 autocorrelation {lag1:.3f}, {a} and {b} correlated {c:+.2f}), which "
+                "a full R would weight the outputs by")
     return None
 
 

@@ -30,6 +30,7 @@ from ._uncertainty import (
     correlation,
     correlation_length,
     covariance,
+    lag1_autocorrelation,
     fisher_information,
 )
 from ._warnings import fit_warnings, issue
@@ -65,6 +66,11 @@ class FitResult(eqx.Module):
       [`fwid.fit`][] also issues each as a [`fwid.FitWarning`][].
     - `noise`: the R the estimates belong to, `"full"` or `"diagonal"` (with `noise="auto"`
       a diagonal R replaces a full one that failed, see `fwid.estimate._noise`).
+    - `lag1`: each output's residual autocorrelation at one sample (the largest over the
+      experiments): near 0 for white measurement noise, near 1 for coloured residuals
+      (process noise or a missing effect).
+    - `residual_corr`: the correlation matrix of the residuals between the outputs (whatever
+      R the fit used).
     """
 
     model: GreyBoxModel
@@ -83,6 +89,8 @@ class FitResult(eqx.Module):
     start: Float[Array, " p"]
     warnings: tuple[str, ...] = eqx.field(static=True, default=())
     noise: str = eqx.field(static=True, default="full")
+    lag1: Float[Array, " ny"] | None = None
+    residual_corr: Float[Array, "ny ny"] | None = None
 
     @property
     def params(self) -> dict:
@@ -203,7 +211,8 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
                 passes=state.search_state.accepted, steps=sol.stats["num_steps"],
                 hist=state.search_state.history,
                 converged=sol.result == optx.RESULTS.successful, M=M, cov_cr=cov_cr,
-                cov=cov_c)
+                cov=cov_c, lag1=jax.vmap(lag1_autocorrelation)(v, batch.mask),
+                residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)))
 
 
 _fit_batch_jit = eqx.filter_jit(_fit_batch)
@@ -375,6 +384,8 @@ def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
         converged=out["converged"],
         start=theta0,
         noise=noise,
+        lag1=jnp.max(jnp.reshape(out["lag1"], (-1, len(model.outputs))), axis=0),
+        residual_corr=out["residual_corr"],
     )
     found = fit_warnings(result, names, max_steps, information=out["M"])
     return dataclasses.replace(result, warnings=tuple(found))

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment
+from ._start_outputs import nominal_start
 
 
 def _derivative(t, x):
@@ -84,4 +85,6 @@ def least_squares_start(model: GreyBoxModel, exps: Sequence[Experiment]) -> Grey
 
         th = _gauss_newton_lstsq(state_residual, jnp.stack([params[k] for k in rest]))
         params.update(dict(zip(rest, th)))
+    else:
+        nominal_start(model, rest)
     return model.with_params(params)

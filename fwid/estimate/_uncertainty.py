@@ -59,6 +59,16 @@ def correlation_length(v: Float[Array, "n ny"], mask: Float[Array, " n"], level:
     return jnp.argmax(rho < level)
 
 
+def lag1_autocorrelation(v: Float[Array, "n ny"], mask: Float[Array, " n"]
+                         ) -> Float[Array, " ny"]:
+    """Each output's residual autocorrelation at one sample, `sum v_k v_k+1 / sum v_k^2`
+    (padding excluded): about 0 (within `2/sqrt(n)`) for white measurement noise, near 1
+    when model error or process noise dominates the residuals."""
+    v = v * mask[:, None]
+    both = (mask[1:] * mask[:-1])[:, None]
+    return jnp.sum(v[1:] * v[:-1] * both, axis=0) / jnp.maximum(jnp.sum(v**2, axis=0), 1e-300)
+
+
 def covariance(M, middle=None):
     """`M^-1` (Cramer-Rao), or `M^-1 middle M^-1` (corrected for coloured residuals)."""
     Minv = jnp.linalg.inv(M)

@@ -1,7 +1,8 @@
 """No silent failure: what a finished output-error fit (Eqs. 10-11) should tell its user.
 
 [`fit_warnings`][] reads a fit's numbers and says, one sentence each, when the fit did not
-converge, when the noise covariance R of Eq. (11) is ill-conditioned, when two parameters are
+converge, when the noise covariance R of Eq. (11) is ill-conditioned, when the residuals bear
+the mark of model error (coloured and correlated between outputs), when two parameters are
 correlated so strongly that the data cannot separate them, or when the estimate or its
 uncertainty is not finite. [`fwid.fit`][] and [`fwid.fit_each`][] issue each as a
 [`fwid.FitWarning`][] and keep them in `FitResult.warnings`.
@@ -22,6 +23,14 @@ from .._errors import FitWarning
 R_COND_MAX = 1e8
 #: Parameter pairs correlated beyond this (in absolute value) are reported.
 CORR_MAX = 0.98
+#: Residuals whose autocorrelation at one sample exceeds this are strongly coloured ...
+COLOURED_LAG1 = 0.8
+#: ... and, correlated between two outputs beyond this, carry the mark of model error (process
+#: noise or a missing effect) rather than of measurement noise. On the textbook cases of
+#: `benchmarks/textbook_cases.py` the residual correlations are 0.57 (FVSysID TC01, ay and
+#: p), 0.85 (TC04) and 0.93 (SIDPAC Twin Otter), all with lag-1 autocorrelations of 0.84-1;
+#: on simulated cycle-averaged DelFly flights (`fwid.identify`) at most 0.43.
+MODEL_ERROR_CORR = 0.5
 
 
 def r_condition(R: Float[ArrayLike, "ny ny"]) -> float:
@@ -55,6 +64,22 @@ def collinear_pairs(M: Float[ArrayLike, "p p"], names: Sequence[str],
         return correlated_pairs(np.nan_to_num(M / np.outer(d, d)), names, limit)
 
 
+def model_error_signature(result) -> tuple[float, str, str, str, float] | None:
+    """`(lag1, output, a, b, corr)` when the fit's residuals are strongly coloured (largest
+    lag-1 autocorrelation `lag1`, on `output`) and correlated between outputs `a` and `b`
+    beyond [`MODEL_ERROR_CORR`][] (`corr`); `None` otherwise (or when the result does not
+    carry the residual statistics)."""
+    if result.lag1 is None or result.residual_corr is None:
+        return None
+    lag1 = np.asarray(result.lag1, dtype=float)
+    outputs = result.model.outputs
+    pairs = correlated_pairs(result.residual_corr, outputs, MODEL_ERROR_CORR)
+    if not pairs or not np.nanmax(lag1) > COLOURED_LAG1:
+        return None
+    k = int(np.nanargmax(lag1))
+    return float(lag1[k]), outputs[k], *pairs[0]
+
+
 def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
                  information: Float[ArrayLike, "p p"] | None = None) -> list[str]:
     """The warnings of one fit (a [`fwid.FitResult`][]), each a sentence that names the
@@ -82,6 +107,14 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
         out.append(f"{who}: the noise covariance R is ill-conditioned (condition number "
                    f"{cond:.3g} in correlation form): outputs are nearly linearly dependent "
                    "or noise-free; try noise='diagonal'")
+    mark = model_error_signature(result)
+    if mark is not None:
+        lag1, out_k, a, b, c = mark
+        out.append(f"{who}: the residuals are strongly coloured (lag-1 autocorrelation "
+                   f"{lag1:.3f} on {out_k}) and correlated between outputs ({a} and {b}: "
+                   f"{c:+.2f}): process noise or a missing effect, not measurement noise; "
+                   "check the model for missing terms; the standard deviations `std` allow "
+                   "for the colour, `std_cr` does not")
     pairs = correlated_pairs(result.corr, result.names)
     if not pairs and information is not None and not np.all(np.isfinite(np.asarray(result.corr))):
         pairs = collinear_pairs(information, result.names)

@@ -135,3 +135,28 @@ def test_auto_noise_falls_back_to_a_diagonal_R_and_says_so():
     assert fwid.fit(model, exps[0], start="model", noise="diagonal").noise == "diagonal"
     with pytest.raises(ValueError, match="noise must be one of 'auto', 'full', 'diagonal'"):
         fwid.fit(model, exps[0], noise="fool")
+
+
+def test_coloured_correlated_residuals_say_model_error_and_auto_uses_a_diagonal_R():
+    """A missing effect (a slow sine the model lacks) in both outputs: residuals coloured
+    and correlated between the outputs. The warning names it; noise='auto' keeps the
+    diagonal-R estimates."""
+    model = _simple(h=lambda x, u, p, c: jnp.stack([x[0], 2.0 * x[0]]), outputs=("y1", "y2"),
+                    name="twice")
+    z = _data(model.with_params(a=3.0, b=2.0), ny=2, noise=0.005)
+    z = z + 0.05 * np.sin(1.3 * T)[:, None] * np.array([1.0, 1.5])
+    r, caught = _fit(model, z, start="model")
+    assert r.noise == "diagonal"
+    assert float(np.max(np.asarray(r.lag1))) > 0.8
+    assert any("model error, not measurement noise" in m for m in caught), caught
+    assert any("strongly coloured" in m and "process noise or a missing effect" in m
+               and "y1 and y2" in m for m in caught), caught
+
+
+def test_least_squares_start_of_a_model_with_h_says_it_keeps_the_nominal_values():
+    model = _simple(h=lambda x, u, p, c: jnp.stack([x[0], 2.0 * x[0]]), outputs=("y1", "y2"),
+                    name="twice")
+    z = _data(model.with_params(a=3.0, b=2.0), ny=2)
+    _, caught = _fit(model, z)  # start="least-squares", the default
+    assert any(m.startswith("twice: the least-squares start keeps the nominal values of a, b")
+               for m in caught), caught

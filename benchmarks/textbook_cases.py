@@ -1,0 +1,96 @@
+"""Textbook output-error cases fitted with fwid's public API and its default settings.
+
+    python benchmarks/textbook_cases.py --json OUT.json [--reference] [--cases tc01,..]
+
+Writes ``{case: {param: {"value": .., "std": ..}}}`` for
+
+* ``tc01``: FVSysID test case 1, ATTAS lateral-directional, 5 outputs, 22 parameters
+  (`_tc01.py`);
+* ``tc04_oem``: FVSysID test case 4, HFB-320 longitudinal nonlinear model, 7 outputs
+  (`_tc04.py`);
+* ``twin_otter_tlonss``: SIDPAC's Twin Otter `tlonss` demo, outputs alpha, q, az, ``p1..p9``
+  (`_twin_otter.py`).
+
+``--reference`` also fits each case with the independent numpy/scipy estimator
+(`_baseline.py`, diagonal R as FVSysID and SIDPAC) and adds, per case, the key
+``"_reference"`` (the same layout) and ``"_agreement"`` (relative difference per parameter,
+worst first) and ``"_fwid"`` (steps, converged, the R used, warnings, wall time). The data are
+read from ``../shared/flightdata`` (or ``$FWID_FLIGHTDATA_ROOT``), never copied.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _tc01  # noqa: E402
+import _tc04  # noqa: E402
+import _twin_otter  # noqa: E402
+from _textbook import agreement, as_table, fit_fwid, fit_reference, fwid_table  # noqa: E402
+
+CASES = {"tc01": lambda: _tc01.CASE, "tc04_oem": lambda: _tc04.CASE,
+         "twin_otter_tlonss": _twin_otter.case}
+
+
+def run_case(key: str, reference: bool) -> dict:
+    case = CASES[key]()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        res = fit_fwid(case)
+    wall = time.perf_counter() - t0
+    out = fwid_table(case, res)
+    print(f"\n{case.title}: fwid {'converged' if bool(res.converged) else 'NOT converged'} in "
+          f"{int(res.steps)} steps, R {res.noise}, {wall:.1f} s (compilation included)")
+    for w in res.warnings:
+        print(f"  warning: {w}")
+    if not reference:
+        return out
+    t0 = time.perf_counter()
+    ref = fit_reference(case)
+    ref_wall = time.perf_counter() - t0
+    ref_table = as_table(case.names, ref["theta"], ref["std"])
+    agree = agreement(case, out, ref_table)
+    print(f"  reference (numpy RK4 + scipy, diagonal R): {ref['n_iter']} relaxations, "
+          f"{ref_wall:.1f} s")
+    print(f"  {'param':<6}{'fwid':>13}{'std':>10}{'reference':>13}{'diff %':>9}"
+          f"{'published':>12}")
+    for k in case.names:
+        pub = case.published.get(k)
+        print(f"  {k:<6}{out[k]['value']:>13.6g}{out[k]['std']:>10.2g}"
+              f"{ref_table[k]['value']:>13.6g}{100 * agree[k]['rel']:>9.4f}"
+              + (f"{pub:>12.5g}" if pub is not None else ""))
+    worst = max(agree, key=lambda k: agree[k]["rel"] if not agree[k]["near_zero"] else 0)
+    print(f"  largest relative difference: {worst} {100 * agree[worst]['rel']:.4f} %; "
+          f"all within 0.5 %: {all(a['ok'] for a in agree.values())}")
+    out["_reference"] = ref_table
+    out["_agreement"] = agree
+    out["_fwid"] = {"steps": int(res.steps), "converged": bool(res.converged),
+                    "noise": res.noise, "warnings": list(res.warnings), "wall_s": wall,
+                    "reference_wall_s": ref_wall}
+    if case.published:
+        out["_published"] = {"values": case.published, "source": case.source}
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", required=True, help="where to write the estimates")
+    ap.add_argument("--reference", action="store_true",
+                    help="also fit the independent reference and compare")
+    ap.add_argument("--cases", default=",".join(CASES), help="comma-separated case keys")
+    args = ap.parse_args(argv)
+    out = {k: run_case(k, args.reference) for k in args.cases.split(",")}
+    Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+    print(f"\nwrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
