@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+from ._inputs import check_paths
+
 
 def _stem(name: str) -> str:
     """A figure file stem for a flight: its name (a path below the inputs' common folder)
@@ -16,6 +18,7 @@ def _stem(name: str) -> str:
 
 
 def identify(args) -> int:
+    check_paths(args.data, args.validate)
     import fwid
 
     t0 = time.perf_counter()

@@ -292,3 +292,22 @@ def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatc
     report = json.loads((tmp_path / "report.json").read_text())  # still written
     assert report["fit"]["converged"] is False
     assert any("did not converge" in w for w in report["warnings"])
+
+
+@pytest.mark.parametrize("args", [["--help"], ["--version"], ["identify", "--help"],
+                                  ["identify", "nope.csv", "--model", "lon"],
+                                  ["diagnose", "--train", "nope", "--test", "nope"]])
+def test_start_up_without_jax_or_matplotlib(args, tmp_path):
+    """Help, version and a missing file are answered before JAX or matplotlib is imported."""
+    probe = ("import sys\nfrom fwid.cli import main\ntry:\n    rc = main(sys.argv[1:])\n"
+             "except SystemExit as e:\n    rc = e.code\n"
+             "heavy = [m for m in ('jax', 'matplotlib', 'diffrax', 'numpy') if m in sys.modules]\n"
+             "print('heavy:', heavy)\nsys.exit(rc)")
+    proc = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True,
+                          timeout=120, cwd=tmp_path)
+    assert proc.returncode == (2 if "nope" in str(args) else 0), proc.stderr
+    assert "heavy: []" in proc.stdout
+    if "nope" in str(args):
+        assert proc.stderr.strip().splitlines() == [
+            "fwid: error: nope" + (".csv" if "identify" in args else "")
+            + ": no such file or folder"]
