@@ -69,6 +69,10 @@ def parser() -> argparse.ArgumentParser:
     i.add_argument("--out", default=None,
                    help="folder for report.json and the figures (without it nothing is written)")
     i.add_argument("--cutoff", type=float, default=5.0, help="cycle-averaged / flapping split [Hz]")
+    i.add_argument("--figures", choices=("summary", "all", "none"), default="summary",
+                   help="lon/lat: one overview of all flights' fits (the worst and best few "
+                   "when many) and the poles (summary), plus one figure per flight (all), or "
+                   "none; flap/combined: their figures (summary, all) or none")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
 
     d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "
