@@ -2,6 +2,7 @@
 
     python benchmarks/speed.py --out benchmarks/results/speed.json [--sizes 1,4,16,64,256]
                                [--quick] [--profile]
+    python benchmarks/speed.py --process [1,16,64]   # the whole process: fwid identify
 
 The same fits, in the same run, by three methods (set up in `benchmarks/_methods.py`):
 
@@ -317,6 +318,18 @@ def markdown(res):
     return "\n".join(lines) + "\n"
 
 
+def process_row(args):
+    """`--process`: see `benchmarks/_process.py`."""
+    import _process
+
+    load0 = os.getloadavg()
+    res = _process.run([int(n) for n in args.process.split(",")],
+                       min(args.scipy_flights, 2), args.seed)
+    res["machine"] = machine(load0)
+    out = HERE / "results" / "speed_process.json"
+    write(res, out, _process.markdown(res, machine_line(res["machine"], "speed.py")))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(HERE / "results" / "speed.json"))
@@ -332,7 +345,14 @@ def main(argv=None):
                     help="flights the scipy loop is timed on (more are extrapolated)")
     ap.add_argument("--loop-flights", type=int, default=4,
                     help="flights fitted one by one with fwid.fit (identity check, loop rows)")
+    ap.add_argument("--process", nargs="?", const="1,16,64", default=None, metavar="SIZES",
+                    help="instead: the whole-process row, `fwid identify` from a shell on "
+                    "SIZES flights (default 1,16,64), cold and warm compilation cache, against "
+                    "scipy in the same run (benchmarks/_process.py); writes "
+                    "results/speed_process.json and .md")
     args = ap.parse_args(argv)
+    if args.process:
+        return process_row(args)
     if args.quick:
         args.sizes = "1,4"
         args.fwid_repeats, args.fwid_batch_repeats, args.ref_repeats = 3, 1, 7

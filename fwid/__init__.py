@@ -1,6 +1,6 @@
 """fwid: identify the flight dynamics of flapping-wing micro air vehicles from free-flight data.
 
-Importing fwid turns on JAX's 64-bit mode (`jax_enable_x64`): output-error estimation needs
+Importing fwid (JAX, once it is imported) turns on JAX's 64-bit mode (`jax_enable_x64`): output-error estimation needs
 float64 (Gauss-Newton with tight tolerances never terminates in float32). Set the environment
 variable `FWID_NO_X64=1` to keep JAX's default and manage the precision yourself.
 
@@ -11,12 +11,17 @@ when JAX has run nothing yet and nobody chose a count (`jax_num_cpu_devices`, or
 `--xla_force_host_platform_device_count` in `XLA_FLAGS`); `FWID_CPU_DEVICES=N` sets N
 (`FWID_CPU_DEVICES=1`: leave JAX's default). Computations that are not spread run on the first
 device as before.
+
+`import fwid` itself is light: JAX, diffrax and matplotlib are imported when first needed (a
+name of `fwid` is looked up in its stage's package on first use: `fwid.fit` imports
+`fwid.estimate`), so `fwid --help` answers without them. JAX is set up right after its first
+import, wherever it happens (`fwid._jax_setup.on_jax_import`); fwid also keeps compiled
+programs in a per-user cache folder (`FWID_JAX_CACHE`; README, 'Compilation cache').
 """
 
-from ._jax_setup import cpu_devices as _cpu_devices, enable_x64 as _enable_x64
-
-_enable_x64()
-_cpu_devices()
+import importlib
+import sys
+import types
 
 from ._errors import (
     ExcitationError as ExcitationError,
@@ -26,99 +31,83 @@ from ._errors import (
     FwidError as FwidError,
     InputError as InputError,
 )
+from ._jax_setup import on_jax_import as _on_jax_import
 
 __version__ = "0.1.0"
 
-from .data import (
-    Flight as Flight,
-    Vehicle as Vehicle,
-    estimate_trim as estimate_trim,
-    first_input_index as first_input_index,
-    load_flight as load_flight,
-    load_flights as load_flights,
-    load_vehicle as load_vehicle,
-)
-from .decompose import (
-    Decomposition as Decomposition,
-    check_flapping_frequency as check_flapping_frequency,
-    cycle_averaged as cycle_averaged,
-    decompose as decompose,
-    estimate_flapping_frequency as estimate_flapping_frequency,
-    flapping_part as flapping_part,
-    flapping_phase as flapping_phase,
-    highpass as highpass,
-    lowpass as lowpass,
-)
-from .models import (
-    GreyBoxModel as GreyBoxModel,
-    combined as combined,
-    estimate_phase_offset as estimate_phase_offset,
-    force_parts as force_parts,
-    fourier_model as fourier_model,
-    fourier_series as fourier_series,
-    shift_phase as shift_phase,
-    heading_rate as heading_rate,
-    lateral as lateral,
-    longitudinal as longitudinal,
-)
-from .simulate import (
-    RK4 as RK4,
-    Experiment as Experiment,
-    experiment as experiment,
-    simulate as simulate,
-    simulate_forces as simulate_forces,
-    stack_experiments as stack_experiments,
-    unstack_experiments as unstack_experiments,
-)
-from .estimate import (
-    RelaxedGaussNewton as RelaxedGaussNewton,
-    FitResult as FitResult,
-    fit as fit,
-    fit_each as fit_each,
-    least_squares_start as least_squares_start,
-)
-from .diagnose import (
-    CATALOGUE as CATALOGUE,
-    Diagnosis as Diagnosis,
-    diagnose as diagnose,
-)
-from .validate import (
-    StateSpace as StateSpace,
-    eigenvalues as eigenvalues,
-    state_space as state_space,
-    fit_metrics as fit_metrics,
-    modes as modes,
-)
-from .sensitivity import (
-    cutoff_cost as cutoff_cost,
-    eigenvalue_sensitivity as eigenvalue_sensitivity,
-    estimate_sensitivity_to_cutoff as estimate_sensitivity_to_cutoff,
-    metric_sensitivity as metric_sensitivity,
-    output_sensitivity as output_sensitivity,
-    rank_sensitivities as rank_sensitivities,
-)
-from .identify import (
-    CombinedIdentification as CombinedIdentification,
-    FlappingIdentification as FlappingIdentification,
-    FlightFit as FlightFit,
-    Identification as Identification,
-    JointComparison as JointComparison,
-    SteadyVsManoeuvre as SteadyVsManoeuvre,
-    compare_joint as compare_joint,
-    evaluate as evaluate,
-    identify as identify,
-    identify_combined as identify_combined,
-    identify_flapping_model as identify_flapping_model,
-    steady_vs_manoeuvre as steady_vs_manoeuvre,
-)
-from .report import (
-    harmonic_amplitudes as harmonic_amplitudes,
-    plot_steady_vs_manoeuvre as plot_steady_vs_manoeuvre,
-    plot_superposition as plot_superposition,
-    plot_time_and_spectrum as plot_time_and_spectrum,
-    identification_report as identification_report,
-    plot_decomposition as plot_decomposition,
-    plot_flight_fit as plot_flight_fit,
-    plot_poles as plot_poles,
-    write_json as write_json,
-)
+_on_jax_import()
+
+#: The public names, by the stage (subpackage) that defines them; imported on first use.
+EXPORTS = {
+    "data": (
+        "Flight", "Vehicle", "estimate_trim", "first_input_index", "load_flight", "load_flights",
+        "load_vehicle",
+    ),
+    "decompose": (
+        "Decomposition", "check_flapping_frequency", "cycle_averaged", "decompose",
+        "estimate_flapping_frequency", "flapping_part", "flapping_phase", "highpass", "lowpass",
+    ),
+    "models": (
+        "GreyBoxModel", "combined", "estimate_phase_offset", "force_parts", "fourier_model",
+        "fourier_series", "shift_phase", "heading_rate", "lateral", "longitudinal",
+    ),
+    "simulate": (
+        "RK4", "Experiment", "experiment", "simulate", "simulate_forces", "stack_experiments",
+        "unstack_experiments",
+    ),
+    "estimate": (
+        "RelaxedGaussNewton", "FitResult", "fit", "fit_each", "least_squares_start",
+    ),
+    "diagnose": (
+        "CATALOGUE", "Diagnosis", "diagnose",
+    ),
+    "validate": (
+        "StateSpace", "eigenvalues", "state_space", "fit_metrics", "modes",
+    ),
+    "sensitivity": (
+        "cutoff_cost", "eigenvalue_sensitivity", "estimate_sensitivity_to_cutoff",
+        "metric_sensitivity", "output_sensitivity", "rank_sensitivities",
+    ),
+    "identify": (
+        "CombinedIdentification", "FlappingIdentification", "FlightFit", "Identification",
+        "JointComparison", "SteadyVsManoeuvre", "compare_joint", "evaluate", "identify",
+        "identify_combined", "identify_flapping_model", "steady_vs_manoeuvre",
+    ),
+    "report": (
+        "harmonic_amplitudes", "plot_steady_vs_manoeuvre", "plot_superposition",
+        "plot_time_and_spectrum", "identification_report", "plot_decomposition",
+        "plot_flight_fit", "plot_poles", "write_json",
+    ),
+}
+_STAGE = {name: stage for stage, names in EXPORTS.items() for name in names}
+_SUBPACKAGES = (*EXPORTS, "synth", "cli")
+__all__ = ["__version__", "ExcitationError", "FitDivergedError", "FitWarning",
+           "FlightDataError", "FwidError", "InputError", *_STAGE]
+
+
+class _Package(types.ModuleType):
+    """`fwid` itself. Importing a stage named like one of its functions (`fwid.simulate`,
+    `fwid.identify`, `fwid.diagnose`, `fwid.decompose`) leaves the function as the attribute,
+    as it was when `fwid/__init__` imported everything."""
+
+    def __setattr__(self, name, value):
+        if name in _STAGE and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+def __getattr__(name):
+    if name in _STAGE:
+        value = getattr(importlib.import_module(f".{_STAGE[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*globals(), *__all__, *_SUBPACKAGES})
+
+
+sys.modules[__name__].__class__ = _Package

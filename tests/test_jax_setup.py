@@ -5,6 +5,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -63,3 +64,44 @@ def test_bad_count_warns():
         assert _jax_setup.wanted_cpu_devices({"FWID_CPU_DEVICES": "many"}) is None
     assert _jax_setup.wanted_cpu_devices({"XLA_FLAGS": "--xla_force_host_platform_device_count=4"}) is None
     assert _jax_setup.wanted_cpu_devices({"FWID_CPU_DEVICES": "4"}) == 4
+
+
+def test_cache_folder_default_moved_and_off(tmp_path):
+    assert _jax_setup.cache_folder({"XDG_CACHE_HOME": str(tmp_path)}) == tmp_path / "fwid" / "jax"
+    assert _jax_setup.cache_folder({"FWID_JAX_CACHE": str(tmp_path / "c")}) == tmp_path / "c"
+    for off in ("0", "off", "OFF", "false"):
+        assert _jax_setup.cache_folder({"FWID_JAX_CACHE": off}) is None
+
+
+CACHE_PROBE = ("import fwid, jax, json; jax.jit(lambda x: x * 2 + 1)(jax.numpy.ones(3))"
+               ".block_until_ready(); print(json.dumps(jax.config.jax_compilation_cache_dir))")
+
+
+@pytest.mark.parametrize("env, where", [
+    ({"FWID_JAX_CACHE": "{tmp}/mine"}, "{tmp}/mine"),      # moved
+    ({"XDG_CACHE_HOME": "{tmp}/xdg"}, "{tmp}/xdg/fwid/jax"),  # the per-user default
+    ({"FWID_JAX_CACHE": "off"}, None),
+    ({"JAX_COMPILATION_CACHE_DIR": "{tmp}/users"}, "{tmp}/users"),  # the user's own: kept
+])
+def test_compilation_cache_on_by_default(tmp_path, env, where):
+    env = {k: v.format(tmp=tmp_path) for k, v in env.items()}
+    clean = {k: v for k, v in os.environ.items()
+             if k not in ("FWID_JAX_CACHE", "XDG_CACHE_HOME", "JAX_COMPILATION_CACHE_DIR")}
+    out = subprocess.run([sys.executable, "-c", CACHE_PROBE], env={**clean, **env},
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    where = None if where is None else where.format(tmp=tmp_path)
+    assert got == where
+    if where is not None and "JAX_COMPILATION_CACHE_DIR" not in env:  # fwid's thresholds:
+        # even this tiny program is kept
+        assert any(Path(where).iterdir())
+
+
+def test_import_fwid_does_not_import_jax():
+    """JAX (and so its setup) comes with the first fwid function used, or the user's import."""
+    probe = ("import sys, fwid; assert 'jax' not in sys.modules; import jax; "
+             "assert jax.config.jax_enable_x64; fwid.fit; assert 'fwid.estimate' in sys.modules")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr

@@ -22,7 +22,7 @@ COMMANDS = {"simulate": simulate, "template": template, "identify": identify,
 
 
 def main(argv=None) -> int:
-    from fwid import InputError
+    from fwid._errors import InputError
 
     args = parser().parse_args(argv)
     try:

@@ -7,8 +7,11 @@ import sys
 import time
 from pathlib import Path
 
+from ._inputs import check_paths
+
 
 def diagnose(args) -> int:
+    check_paths(args.train, args.test)
     import fwid
     from fwid.report import diagnosis_summary, plot_gap_map, write_json
 

@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+from ._inputs import check_paths
+
 
 def _stem(name: str) -> str:
     """A figure file stem for a flight: its name (a path below the inputs' common folder)
@@ -16,6 +18,7 @@ def _stem(name: str) -> str:
 
 
 def identify(args) -> int:
+    check_paths(args.data, args.validate)
     import fwid
 
     t0 = time.perf_counter()
@@ -25,6 +28,8 @@ def identify(args) -> int:
         report, figures = _flapping(args, flights, validate)
     else:
         report, figures = _cycle_averaged(args, flights, validate)
+    if args.figures == "none":
+        figures = []
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
@@ -55,7 +60,8 @@ def _exit_code(report: dict) -> int:
 def _cycle_averaged(args, flights, validate):
     """`--model lon|lat`: Section IV; with `--joint --validate`, joint vs individual."""
     import fwid
-    from fwid.report import identification_summary, joint_report, joint_summary
+    from fwid.report import (identification_summary, joint_report, joint_summary,
+                             plot_fits_overview)
 
     ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
                           cutoff=args.cutoff, progress=not args.quiet)
@@ -69,10 +75,14 @@ def _cycle_averaged(args, flights, validate):
         print("\n" + joint_summary(comparison))
 
     def figures(out):
-        for ff in ident.estimation:
+        fits = [*ident.estimation, *ident.validation]
+        plot_fits_overview(fits, path=out / "fits.png", title=f"{args.model} model",
+                           parts=["estimation"] * len(ident.estimation)
+                           + ["validation"] * len(ident.validation))
+        for ff in ident.estimation if args.figures == "all" else ():
             fwid.plot_flight_fit(ff, path=out / f"fit_{_stem(ff.name)}.png",
                                  title=f"{ff.name}: estimation ({args.model})")
-        for ff in ident.validation:
+        for ff in ident.validation if args.figures == "all" else ():
             fwid.plot_flight_fit(ff, path=out / f"validation_{_stem(ff.name)}.png",
                                  title=f"{ff.name}: validation ({args.model})")
         eigs = [fwid.eigenvalues(f.model, ident.consts) for f in ident.fits]

@@ -4,13 +4,28 @@ default and choices."""
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
+
+
+class _Effects(Sequence):
+    """The effects `fwid simulate --effect` takes, from `fwid.synth` (which imports JAX) only
+    when they are needed: for `fwid simulate` and its help, not for `fwid --help`."""
+
+    def _all(self):
+        from fwid.synth import EFFECTS, OUT_OF_CATALOGUE
+
+        return EFFECTS + OUT_OF_CATALOGUE
+
+    def __getitem__(self, i):
+        return self._all()[i]
+
+    def __len__(self):
+        return len(self._all())
 
 
 def parser() -> argparse.ArgumentParser:
     from fwid import __version__
-    from fwid.synth import EFFECTS, OUT_OF_CATALOGUE
 
-    effects = EFFECTS + OUT_OF_CATALOGUE
     fmt = argparse.ArgumentDefaultsHelpFormatter
     p = argparse.ArgumentParser(
         prog="fwid",
@@ -25,8 +40,8 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--flights", type=int, default=4, help="number of flights")
     s.add_argument("--axis", choices=("lon", "lat"), default="lon",
                    help="manoeuvre axis: elevator (lon) or rudder (lat)")
-    s.add_argument("--effect", choices=effects, default="none", metavar="EFFECT",
-                   help="unmodelled effect to inject, one of: " + ", ".join(effects))
+    s.add_argument("--effect", choices=_Effects(), default="none", metavar="EFFECT",
+                   help="unmodelled effect to inject, one of: %(choices)s")
     s.add_argument("--strength", type=float, default=1.0,
                    help="effect strength (1: as strong as the noise on its loads)")
     s.add_argument("--seed", type=int, default=0, help="random seed")
@@ -54,6 +69,10 @@ def parser() -> argparse.ArgumentParser:
     i.add_argument("--out", default=None,
                    help="folder for report.json and the figures (without it nothing is written)")
     i.add_argument("--cutoff", type=float, default=5.0, help="cycle-averaged / flapping split [Hz]")
+    i.add_argument("--figures", choices=("summary", "all", "none"), default="summary",
+                   help="lon/lat: one overview of all flights' fits (the worst and best few "
+                   "when many) and the poles (summary), plus one figure per flight (all), or "
+                   "none; flap/combined: their figures (summary, all) or none")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
 
     d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "

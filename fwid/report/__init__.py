@@ -7,7 +7,8 @@
   `joint_vs_individual`).
 - Terminal summaries: `identification_summary`, `flapping_summary` and the tables
   (`_table.py`); `joint_summary` (`_joint.py`); `diagnosis_summary` (`_diagnosis.py`).
-- Figures (object-oriented matplotlib): fits and poles (`_figures.py`, Figures 6-11), the
+- Figures (object-oriented matplotlib): fits and poles (`_figures.py`, Figures 6-11), a batch's fits in
+  one figure (`_overview.py`, `plot_fits_overview`), the
   decomposition (`_decomposition_plot.py`, Figure 4), time and spectrum (`_spectra.py`,
   Figures 12-17), the gap map (`_diagnosis.py`).
 """
@@ -15,6 +16,7 @@
 from ._decomposition_plot import plot_decomposition as plot_decomposition
 from ._diagnosis import diagnosis_summary as diagnosis_summary, plot_gap_map as plot_gap_map
 from ._figures import plot_flight_fit as plot_flight_fit, plot_poles as plot_poles
+from ._overview import plot_fits_overview as plot_fits_overview
 from ._flapping import combined_report as combined_report, flapping_report as flapping_report
 from ._identification import (
     converged_flags as converged_flags,

@@ -21,7 +21,7 @@ def flights(tmp_path_factory):
 def identified(flights, tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     rc = main(["identify", str(flights / "lon_0.csv"), "--model", "lon", "--validate",
-               str(flights / "lon_1.csv"), "--out", str(out), "--quiet"])
+               str(flights / "lon_1.csv"), "--out", str(out), "--quiet", "--figures", "all"])
     return rc, out
 
 
@@ -50,7 +50,7 @@ def test_identify_report_contract(identified):
             m = report["metrics"][part][out_name]
             assert set(m) >= {"corr", "r2", "rms", "rms_pct"}
             assert m["corr"] > 0.9
-    for fig in ("fit_lon_0.png", "validation_lon_1.png", "poles.png"):
+    for fig in ("fit_lon_0.png", "validation_lon_1.png", "poles.png", "fits.png"):
         assert (out / fig).stat().st_size > 10_000
 
 
@@ -222,7 +222,7 @@ def test_equal_file_names_in_two_folders_give_distinct_figures(flights, tmp_path
             shutil.copy(flights / name, tmp_path / sub / name)
     out = tmp_path / "out"
     assert main(["identify", str(tmp_path / "clean"), str(tmp_path / "demo"), "--model", "lon",
-                 "--out", str(out), "--quiet"]) == 0
+                 "--out", str(out), "--quiet", "--figures", "all"]) == 0
     report = json.loads((out / "report.json").read_text())
     assert report["flights"] == ["clean/lon_0.csv", "demo/lon_0.csv"]
     assert {p.name for p in out.glob("fit_*.png")} == {"fit_clean__lon_0.png",
@@ -292,3 +292,34 @@ def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatc
     report = json.loads((tmp_path / "report.json").read_text())  # still written
     assert report["fit"]["converged"] is False
     assert any("did not converge" in w for w in report["warnings"])
+
+
+@pytest.mark.parametrize("args", [["--help"], ["--version"], ["identify", "--help"],
+                                  ["identify", "nope.csv", "--model", "lon"],
+                                  ["diagnose", "--train", "nope", "--test", "nope"]])
+def test_start_up_without_jax_or_matplotlib(args, tmp_path):
+    """Help, version and a missing file are answered before JAX or matplotlib is imported."""
+    probe = ("import sys\nfrom fwid.cli import main\ntry:\n    rc = main(sys.argv[1:])\n"
+             "except SystemExit as e:\n    rc = e.code\n"
+             "heavy = [m for m in ('jax', 'matplotlib', 'diffrax', 'numpy') if m in sys.modules]\n"
+             "print('heavy:', heavy)\nsys.exit(rc)")
+    proc = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True,
+                          timeout=120, cwd=tmp_path)
+    assert proc.returncode == (2 if "nope" in str(args) else 0), proc.stderr
+    assert "heavy: []" in proc.stdout
+    if "nope" in str(args):
+        assert proc.stderr.strip().splitlines() == [
+            "fwid: error: nope" + (".csv" if "identify" in args else "")
+            + ": no such file or folder"]
+
+
+def test_figures_summary_by_default_or_none(flights, tmp_path):
+    """By default one overview of the fits and the poles, no figure per flight; `none`: no
+    figure at all (the report still whole)."""
+    for figures, pngs in ((None, {"fits.png", "poles.png"}), ("none", set())):
+        out = tmp_path / str(figures)
+        extra = ["--figures", figures] if figures else []
+        assert main(["identify", str(flights), "--model", "lon", "--out", str(out), "--quiet",
+                     *extra]) == 0
+        assert {p.name for p in out.glob("*.png")} == pngs
+        assert (out / "report.json").exists()

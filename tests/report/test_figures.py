@@ -43,3 +43,22 @@ def test_poles_circles_rays_and_many_flights():
     styles = {(ln.get_marker(), ln.get_color()) for ln in marks}
     assert len(styles) == 16  # every flight told apart
     assert len(fig.legends[0].get_texts()) == 16
+
+
+def test_overview_one_row_a_flight_or_the_worst_and_best(tmp_path):
+    from fwid.report import plot_fits_overview
+    from fwid.report._overview import overview_rows
+
+    fits = []
+    for i in range(12):
+        ff = _flight_fit()
+        fits.append(FlightFit(f"f{i}", ff.t, ff.inputs, ff.measured, ff.simulated, {}, {},
+                              {k: dict(corr=1.0, r2=i / 12, rms=0.0, rms_pct=0.0)
+                               for k in ff.measured}, {}))
+    fig = plot_fits_overview(fits[:3], path=tmp_path / "fits.png")
+    assert len(fig.axes) == 3 * 4 and (tmp_path / "fits.png").stat().st_size > 0
+    rows = overview_rows(fits, most=6)
+    assert [(rank, f.name) for rank, f in rows] == [
+        ("worst", "f0"), ("worst", "f1"), ("worst", "f2"),
+        ("best", "f9"), ("best", "f10"), ("best", "f11")]
+    assert len(plot_fits_overview(fits, most=6).axes) == 6 * 4
