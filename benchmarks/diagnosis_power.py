@@ -166,8 +166,16 @@ def run_case(case: dict) -> dict:
         rec["effects"] = [e if isinstance(e, str) else e.get("effect") for e in effects]
         rec["effects_detail"] = [e for e in effects if isinstance(e, dict)]
     rec["candidates"] = _record_candidates(diag)
-    v = diag.candidate(diag.verdict) if diag.verdict != "none" else None
+    v = diag.lead if hasattr(diag, "lead") else (
+        diag.candidate(diag.verdict) if diag.verdict != "none" else None)
     rec["shrink_pct"] = v.get("shrink_pct") if v else None
+    u = getattr(diag, "unexplained", None)
+    if u:
+        rec["unexplained"] = {k: u.get(k) for k in ("probe", "drivers", "test_shrink_pct", "p",
+                                                    "redness_after")}
+    for k in ("disturbance", "first_round"):
+        if getattr(diag, k, None) is not None:
+            rec[k] = getattr(diag, k)
     return rec
 
 

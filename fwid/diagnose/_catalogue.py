@@ -97,7 +97,8 @@ class Effect:
     it adds to the model of `load` in `band` (`h`, `dh`: the flight's flapping series of that
     load and its phase derivative); `variants` are the discrete choices fitted by trying each
     (e.g. time constants). With `replaces_input`, the single column returned replaces the
-    control column of the baseline instead of being added."""
+    control column of the baseline instead of being added. `labels(load)`, if given, names
+    the measured signal behind each column (the drivers of an unexplained gap)."""
 
     name: str
     description: str
@@ -105,6 +106,7 @@ class Effect:
     columns: Callable = dataclasses.field(repr=False)
     variants: tuple = (None,)
     replaces_input: bool = False
+    labels: Callable | None = dataclasses.field(default=None, repr=False, compare=False)
 
 
 CATALOGUE: tuple[Effect, ...] = (

@@ -12,7 +12,9 @@ from .._errors import ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units
 from ._catalogue import CATALOGUE, Effect
+from ._disturbance import RED_MIN, colour, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
+from ._probes import PROBES
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, Half
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, signals
@@ -20,10 +22,14 @@ from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, signals
 
 @dataclasses.dataclass
 class Diagnosis:
-    """The result of [`fwid.diagnose`][]: `verdict` (an effect name or `"none"`),
-    `candidates` (ranked, best first, CONTRACTS section 3), `localisation` (the gap map of the
-    baseline on the test flights), and the held-out load residuals before (`residuals`) and
-    after each candidate (`augmented[name]`), by test flight and load, for figures."""
+    """The result of [`fwid.diagnose`][]: `verdict` (an effect name, `"unexplained"`,
+    `"random-disturbance"` or `"none"`), `disturbance` (the colour, size and spectrum of the
+    baseline's cycle-averaged held-out residual, `_disturbance.py`), `candidates` (the catalogue, ranked, best first, CONTRACTS section 3), `probes`
+    (the same for the structure outside the catalogue, `_probes.py`), `unexplained` (what the
+    first probe selected says: drivers and shrink; `None` when no probe is selected),
+    `localisation` (the gap map of the baseline on the test flights), and the held-out load
+    residuals before (`residuals`) and after each candidate or probe (`augmented[name]`), by
+    test flight and load, for figures."""
 
     axis: str
     train: list[str]
@@ -36,13 +42,27 @@ class Diagnosis:
     residuals: list[dict] = dataclasses.field(repr=False)
     augmented: dict = dataclasses.field(repr=False)
     measured: list[dict] = dataclasses.field(repr=False)
+    probes: list[dict] = dataclasses.field(default_factory=list, repr=False)
+    unexplained: dict | None = None
+    disturbance: dict | None = None
+    first_round: dict = dataclasses.field(default_factory=dict, repr=False)
     settings: dict = dataclasses.field(default_factory=dict)
 
     def candidate(self, name: str) -> dict:
-        for c in self.candidates:
+        """The catalogue candidate or probe `name`."""
+        for c in self.candidates + self.probes:
             if c["effect"] == name:
                 return c
         raise KeyError(name)
+
+    @property
+    def lead(self) -> dict | None:
+        """The candidate behind the verdict: the effect named, the probe of an
+        `"unexplained"` verdict, or `None`."""
+        if self.verdict == "unexplained":
+            return self.candidate(self.unexplained["probe"])
+        named = {c["effect"] for c in self.candidates}
+        return self.candidate(self.verdict) if self.verdict in named else None
 
     def to_json(self) -> dict:
         """`diagnosis.json` (CONTRACTS section 3)."""
@@ -53,7 +73,11 @@ class Diagnosis:
             "train": self.train,
             "test": self.test,
             "candidates": self.candidates,
+            "unexplained": self.unexplained,
+            "probes": self.probes,
+            "disturbance": self.disturbance,
             "localisation": self.localisation,
+            "first_round": self.first_round,
             "method": self.settings,
         }
 
@@ -61,6 +85,8 @@ class Diagnosis:
 def _variant_text(v) -> str | None:
     if v is None:
         return None
+    if isinstance(v, float):  # a probe's time constant or lead
+        return f"{v:g} s"
     kind, tau = v
     return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
 
@@ -94,12 +120,33 @@ def _blocks(sigs, first: int) -> tuple[list, list]:
     return out, parents
 
 
+def drivers(engine: Engine, idx, probe: Effect, variant, sigma2: dict) -> list[dict]:
+    """The measured signals a probe leans on, most first: per signal, the RMS over the units
+    `idx` of its columns' contribution (coefficient x column, fitted with the baseline on
+    `idx`), relative to the baseline's RMS error, summed over the probe's loads."""
+    weight: dict[str, float] = {}
+    model = ((probe, variant),)
+    for ch in engine.channels(probe.band):
+        theta, _ = engine.fit(idx, ch, model)
+        cols = np.concatenate([engine.design(i, ch, model) for i in idx])
+        names = probe.labels(ch[0]) if probe.labels else (probe.name,)
+        k = len(names)
+        part = cols[:, -k:] * theta[-k:]
+        for j, name in enumerate(names):
+            w = float(np.std(part[:, j]) / math.sqrt(sigma2[ch]))
+            weight[name] = weight.get(name, 0.0) + w
+    total = sum(weight.values()) or 1.0
+    return [{"signal": n, "share_pct": 100.0 * w / total}
+            for n, w in sorted(weight.items(), key=lambda kv: -kv[1])]
+
+
 def diagnose(
     train: Sequence[Flight],
     test: Sequence[Flight],
     *,
     axis: str = "lon",
     catalogue: Sequence[Effect] = CATALOGUE,
+    probes: Sequence[Effect] = PROBES,
     cutoff: float = 5.0,
     alpha: float = ALPHA,
     min_gain: float = MIN_GAIN,
@@ -125,13 +172,25 @@ def diagnose(
        of the RMS of the affected loads (each relative to its baseline RMS).
     3. **Where**: the gap map of the baseline on the test flights (`gap_map`).
 
-    `verdict` is the first effect selected, or `"none"`. Each candidate carries its p value,
+    The probes (`_probes.py`: a leading deflection, attitude, drift, flapping frequency) take
+    part in the selection as rivals: when one enters first, the gap is
+    predictable from what was measured but no catalogue entry explains it, and the verdict is
+    `"unexplained"` (with the probe's `drivers`), never the catalogue entry that merely
+    correlates with it.
+
+    4. **Nothing named**: the colour of the held-out residual (`_disturbance.py`) tells a
+       disturbance nothing measured predicts (`"random-disturbance"`: red, as gusts make it)
+       from measurement noise (`"none"`: the model is adequate, up to the detection limit).
+       A probe that leaves the residual red was a proxy of a disturbance, not structure.
+
+    `verdict` is the first effect selected, `"unexplained"`, `"random-disturbance"`, or
+    `"none"`. Each candidate carries its p value,
     a `confidence` (one minus the p value corrected over the candidates in play) and the
     detection limit: the held-out error reduction the test would have seen with 80 % power.
 
     **Arguments:** `train`, `test` (flights), `axis` (`"lon"`/`"lat"`, the manoeuvre's axis),
-    `catalogue`, `cutoff` (the split [Hz]), `alpha` (family-wise false-alarm level per
-    selection round), `min_gain` (smallest typical held-out relative error drop that counts),
+    `catalogue`, `probes` (rivals outside the catalogue; `()` for none), `cutoff` (the split
+    [Hz]), `alpha` (family-wise false-alarm level per selection round), `min_gain` (smallest typical held-out relative error drop that counts),
     `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
@@ -148,7 +207,7 @@ def diagnose(
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
-                    loads, catalogue)
+                    loads, tuple(catalogue) + tuple(probes))
     n_tr, n_te, n_trb = len(tr_sig), len(te_sig), len(tr_blocks)
     train_idx = tuple(range(n_tr))
     test_idx = tuple(range(n_tr, n_tr + n_te))
@@ -158,9 +217,9 @@ def diagnose(
     halves = [Half(train_idx, teb_idx, sigma2),
               Half(test_idx, trb_idx, engine.mean_square(test_idx))]
 
-    say(f"testing {len(catalogue)} candidates by cross-fit over {len(trb_idx) + len(teb_idx)} "
-        "blocks, forward selection")
-    sel = forward_select(engine, halves, catalogue, alpha, min_gain)
+    say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
+        f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")
+    sel = forward_select(engine, halves, tuple(catalogue) + tuple(probes), alpha, min_gain)
 
     say("re-fitting on the training flights, scoring on the test flights")
 
@@ -196,8 +255,10 @@ def diagnose(
     rms_before = rms_by_load(before)
     chosen = [e.name for e, _ in sel.chosen]
 
-    candidates, augmented = [], {}
-    for e in catalogue:
+    chosen = [e.name for e, _ in sel.chosen]
+    augmented: dict = {}
+
+    def describe(e: Effect) -> dict:
         ev = sel.last[e.name]
         variant = engine.best_variant(train_idx, (), e, sigma2)
         after_band = test_residuals(((e, variant),))
@@ -213,7 +274,7 @@ def diagnose(
         band_drop = {b: 100.0 * (1.0 - a / x) if x > 0 else 0.0
                      for b, x, a in zip(BAND_NAMES, eb, ea)}
         level = sel.level[e.name]
-        candidates.append({
+        return {
             "effect": e.name,
             "significant": e.name in chosen,
             "shrink_pct": shrink(rms_before, rms_after, affected),
@@ -229,21 +290,56 @@ def diagnose(
             "test_rms_in_band": {ld: {"before": b, "after": a} for ld, (b, a) in in_band.items()},
             "evidence": ev.as_dict(level),
             "description": e.description,
-        })
-    order = {name: k for k, name in enumerate(chosen)}
-    candidates.sort(key=lambda c: (order.get(c["effect"], len(order)), c["p"]))
-    verdict = chosen[0] if chosen else "none"
+        }
 
-    effects, model, prev = [], (), rms_before
+    order = {name: k for k, name in enumerate(chosen)}
+
+    def ranked(effects):
+        out = [describe(e) for e in effects]
+        out.sort(key=lambda c: (order.get(c["effect"], len(order)), c["p"]))
+        return out
+
+    candidates, probe_rows = ranked(catalogue), ranked(probes)
+    named = {e.name for e in catalogue}
+    verdict = "none" if not chosen else chosen[0] if chosen[0] in named else "unexplained"
+
+    own = [ld for ld in loads if ld in AXIS_LOADS[axis]]
+    dts = [s.dt for s in te_sig]
+    own_scale = {ld: sigma2[(ld, "averaged")] for ld in own}
+
+    def slow_part(res):
+        return [{ld: r[(ld, "averaged")] for ld in own} for r in res]
+
+    effects, unexplained, model, prev = [], None, (), rms_before
     for e, ev in sel.chosen:
         model = model + ((e, engine.best_variant(train_idx, model, e, sigma2)),)
-        now = rms_by_load([full(r) for r in test_residuals(model)])
+        res = test_residuals(model)
+        now = rms_by_load([full(r) for r in res])
         affected = affected_loads(ev)
-        effects.append({"effect": e.name, "variant": _variant_text(model[-1][1]),
-                        "p": ev.p, "affected": affected,
-                        "shrink_pct": shrink(prev, now, affected),
-                        "test_rms_before": prev, "test_rms_after": now})
+        row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
+               "p": ev.p, "affected": affected,
+               "shrink_pct": shrink(prev, now, affected),
+               "test_rms_before": prev, "test_rms_after": now}
         prev = now
+        if e.name in named:
+            effects.append(row)
+        elif unexplained is None:
+            unexplained = {"probe": e.name, "description": e.description,
+                           "drivers": drivers(engine, train_idx, e, model[-1][1], sigma2),
+                           "test_shrink_pct": row["shrink_pct"], "p": ev.p,
+                           "variant": row["variant"], "affected": affected,
+                           "redness_after": colour(slow_part(res), dts, own,
+                                                   own_scale)["redness"]}
+
+    disturbance = colour(slow_part(base_res), dts, own, own_scale)
+    disturbance.update(spectrum(slow_part(base_res), dts, own), red_min=RED_MIN)
+    # a probe that leaves the residual as red as a disturbance found a proxy of it (a state
+    # that integrates the disturbance), not structure; nothing at all found and a red
+    # residual: a disturbance nothing measured predicts
+    if verdict == "unexplained" and unexplained["redness_after"] >= RED_MIN:
+        verdict = "random-disturbance"
+    elif verdict == "none" and disturbance["redness"] >= RED_MIN:
+        verdict = "random-disturbance"
 
     say("mapping the gap")
     measured = [{ld: s.loads["averaged"][ld] + s.loads["flapping"][ld] for ld in loads}
@@ -257,6 +353,11 @@ def diagnose(
         verdict=verdict,
         effects=effects,
         candidates=candidates,
+        probes=probe_rows,
+        unexplained=unexplained,
+        disturbance=disturbance,
+        first_round={k: {"p": ev.p, "gain_pct": 100.0 * ev.gain, "t": ev.t}
+                     for k, ev in sel.first.items()},
         localisation=localisation,
         residuals=before,
         augmented=augmented,

@@ -31,12 +31,14 @@ class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
     `last`: every candidate's evidence in the last round it was tested (for those chosen, the
     round that admitted it); `level`: the per-candidate level of that round;
-    `models`: the chosen model on each half."""
+    `models`: the chosen model on each half; `first`: every candidate's evidence in the
+    first round (each against the baseline alone)."""
 
     chosen: list[tuple[Effect, Evidence]]
     last: dict[str, Evidence]
     level: dict[str, float]
     models: list[Model]
+    first: dict[str, Evidence]
 
 
 def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effect],
@@ -44,11 +46,12 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
                    max_effects: int = MAX_EFFECTS) -> Selection:
     models: list[Model] = [() for _ in halves]
     remaining = list(catalogue)
-    chosen, last, level = [], {}, {}
+    chosen, last, level, first = [], {}, {}, {}
     while remaining and len(chosen) < max_effects:
         lv = alpha / len(remaining)
         ev = {e.name: evidence(engine, halves, models, e) for e in remaining}
         last.update(ev)
+        first = first or dict(ev)
         level.update({e.name: lv for e in remaining})
         ok = [e for e in remaining if ev[e.name].p < lv and ev[e.name].gain >= min_gain]
         if not ok:
@@ -57,4 +60,4 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         chosen.append((best, ev[best.name]))
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
-    return Selection(chosen, last, level, models)
+    return Selection(chosen, last, level, models, first)

@@ -39,7 +39,7 @@ def diagnosis_summary(d: Diagnosis) -> str:
     loc = d.localisation
     # the loads to talk about: those the verdict affects, else the manoeuvre axis's own
     own = [ld for ld in loc["by_output"] if ld in AXIS_LOADS[d.axis]]
-    focus = d.candidate(d.verdict)["affected"] if d.verdict != "none" else own
+    focus = d.lead["affected"] if d.lead is not None else own
     worst = max(focus or loc["by_output"], key=lambda ld: loc["by_output"][ld]["unexplained_pct"])
     bands = loc["by_band"][worst]
     top_band = max(bands, key=bands.get)
@@ -59,6 +59,22 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append("  VERDICT: none (no candidate effect improves the held-out fit "
                      "significantly; with 80 % power the test would have seen a drop of the "
                      f"held-out error of {min(lim):.1f}-{max(lim):.1f} %, see 'detect. limit')")
+    elif d.verdict == "random-disturbance":
+        dist = d.disturbance
+        size = ", ".join(f"{ld} {v:.3g}" for ld, v in dist["rms"].items())
+        lines.append("  VERDICT: random-disturbance: no catalogue effect or probe explains the "
+                     "held-out error, but it is red (low/high-frequency PSD ratio "
+                     f"{dist['redness']:.1f} >= {dist['red_min']:g}), as gusts or process noise "
+                     f"make it; cycle-averaged residual RMS {size}; a filter-error fit models it")
+    elif d.verdict == "unexplained":
+        u = d.unexplained
+        drv = ", ".join(f"{x['signal']} {x['share_pct']:.0f} %" for x in u["drivers"])
+        lines.append(f"  VERDICT: unexplained: the held-out error of {'/'.join(u['affected'])} "
+                     f"is predictable from the measured signals ({u['description']}"
+                     + (f", {u['variant']}" if u["variant"] else "")
+                     + f"; p = {u['p']:.2g}), but no catalogue effect explains it better; "
+                     f"drivers: {drv}; adding it shrinks the held-out RMS "
+                     f"{u['test_shrink_pct']:.1f} %")
     else:
         c = d.candidate(d.verdict)
         change = ", ".join(
@@ -68,14 +84,21 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
-        for e in d.effects[1:]:
-            lines.append(f"  and also: {e['effect']}"
-                         + (f" ({e['variant']})" if e["variant"] else "")
-                         + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
-                         f"{'/'.join(e['affected'])}")
+    for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
+        lines.append(f"  and also: {e['effect']}"
+                     + (f" ({e['variant']})" if e["variant"] else "")
+                     + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
+                     f"{'/'.join(e['affected'])}")
+    if d.unexplained is not None and d.verdict != "unexplained":
+        u = d.unexplained
+        lines.append(f"  and unexplained structure left: {u['description']}, p = {u['p']:.2g}, "
+                     f"driven by {u['drivers'][0]['signal']}: a further "
+                     f"{u['test_shrink_pct']:.1f} % on {'/'.join(u['affected'])}")
     lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'in-band shrink %':>16} "
                  f"{'overall %':>9} {'detect. limit %':>15}")
-    for c in d.candidates:
+    for k, c in enumerate(d.candidates + d.probes):
+        if k == len(d.candidates):
+            lines.append("  probes (outside the catalogue):")
         band = in_band_shrink(c)
         lines.append(
             f"  {c['effect']:<18} {('yes' if c['significant'] else 'no'):>6} {c['p']:8.2g} "
@@ -130,14 +153,14 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
                        fontsize=9)
     ax[1, 0].legend(fontsize=8)
 
-    c = d.candidate(d.verdict) if d.verdict != "none" else d.candidates[0]
+    c = d.lead or d.candidates[0]
     before = [c["test_rms_before"][ld] for ld in loads]
     after = [c["test_rms_after"][ld] / b if b > 0 else 1.0 for ld, b in zip(loads, before)]
     ax[1, 1].bar(x, after, color=["C2" if ld in c["affected"] else "C7" for ld in loads])
     ax[1, 1].axhline(1.0, color="k", lw=0.8)
     ax[1, 1].set_xticks(x, loads)
     ax[1, 1].set_ylabel("held-out RMS after / before")
-    ax[1, 1].set_title(f"{'verdict' if d.verdict != 'none' else 'best candidate (not significant)'}"
+    ax[1, 1].set_title(f"{'verdict' if d.lead else 'best candidate (not significant)'}"
                        f": {c['effect']}\nheld-out RMS shrinks {_shrink_text(c)}", fontsize=9)
     ax[1, 1].set_ylim(0, 1.1)
     fig.suptitle(f"fwid diagnose ({d.axis}): verdict {d.verdict}")

@@ -1,0 +1,93 @@
+"""No silent `none`: structure outside the catalogue is `unexplained` (with its drivers),
+gusts are a `random-disturbance`, and neither is named after a catalogue entry."""
+
+import json
+
+import numpy as np
+import fwid
+from fwid.diagnose import EFFECT_NAMES
+from fwid.diagnose._disturbance import HIGH_HZ, LOW_HZ, RED_MIN, band_psd, colour
+
+
+def _load(train_dir, test_dir):
+    return fwid.load_flights(train_dir), fwid.load_flights(test_dir)
+
+
+def test_redness_of_white_and_of_low_passed_noise():
+    """White noise has a flat spectrum (ratio 1); noise through a 0.5 Hz first-order low pass
+    is red. The band PSDs equal a direct FFT periodogram (an independent computation)."""
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(0)
+    dt = 0.005
+    white = [{"M": rng.standard_normal(1000)} for _ in range(12)]
+    r_white = colour(white, [dt] * 12, ["M"], {"M": 1.0})["redness"]
+    assert 0.7 < r_white < 1.4
+    a = np.exp(-2 * np.pi * 0.5 * dt)
+    red = [{"M": lfilter([1 - a], [1, -a], rng.standard_normal(1000))} for _ in range(12)]
+    assert colour(red, [dt] * 12, ["M"], {"M": 1.0})["redness"] > 5 * RED_MIN
+
+    x = white[0]["M"]
+    w = np.hanning(len(x) + 1)[:-1]  # periodic Hann, as scipy's periodogram uses
+    spec = np.abs(np.fft.rfft((x - x.mean()) * w)) ** 2 * 2 * dt / np.sum(w ** 2)
+    f = np.fft.rfftfreq(len(x), dt)
+    ref = [np.mean(spec[(f >= lo) & (f <= hi)]) for lo, hi in (LOW_HZ, HIGH_HZ)]
+    np.testing.assert_allclose(band_psd(x, dt), ref, rtol=1e-9)
+
+
+def test_gusts_are_a_random_disturbance(effect_flights):
+    """Unmeasured gusts: no catalogue name, `random-disturbance`, with the residual's size and
+    spectrum; the report says so."""
+    from fwid.report import diagnosis_summary
+
+    d = fwid.diagnose(*_load(*effect_flights("turbulence", strength=1.0, seed=3)))
+    assert d.verdict == "random-disturbance"
+    assert not any(c["significant"] for c in d.candidates)
+    dist = d.disturbance
+    assert dist["redness"] >= RED_MIN
+    assert set(dist["rms"]) == {"X", "Z", "M"} and all(v > 0 for v in dist["rms"].values())
+    assert len(dist["psd"]["M"]) == len(dist["bands_hz"])
+    assert "VERDICT: random-disturbance" in diagnosis_summary(d)
+
+
+def test_a_control_log_that_trails_is_unexplained_not_actuator_dynamics(effect_flights):
+    """The deflection acts before it is logged (a clock offset between the logs): the
+    catalogue's actuator entry only lets it act after, so the answer is `unexplained`, driven
+    by the elevator, never a catalogue name."""
+    d = fwid.diagnose(*_load(*effect_flights("sensor-offset", strength=1.0, seed=2)))
+    assert d.verdict == "unexplained", (d.verdict, d.first_round)
+    assert d.unexplained["probe"] == "input-lead"
+    assert d.unexplained["drivers"][0]["signal"] == "de"
+    assert d.unexplained["test_shrink_pct"] > 0
+    rep = json.loads(json.dumps(d.to_json()))
+    assert rep["unexplained"]["drivers"][0]["signal"] == "de"
+    assert {p["effect"] for p in rep["probes"]} >= {"input-lead", "attitude"}
+
+
+def _with_load(src, dst, load: str, state: str, gain: float):
+    """Copy a folder of flights, adding `gain * (state - state at t=0)` to the `load` column:
+    a load that follows a state no catalogue entry uses (an outside form)."""
+    dst.mkdir(parents=True, exist_ok=True)
+    (dst / "vehicle.json").write_text((src / "vehicle.json").read_text())
+    for csv in sorted(src.glob("*.csv")):
+        header = csv.read_text().splitlines()[0]
+        names = header.split(",")
+        data = np.loadtxt(csv, delimiter=",", skiprows=1)
+        x = data[:, names.index(state)]
+        data[:, names.index(load)] += gain * (x - x[0])
+        np.savetxt(dst / csv.name, data, delimiter=",", header=header, comments="", fmt="%.12g")
+    return dst
+
+
+def test_a_load_that_follows_the_attitude_is_unexplained_with_theta_first(effect_flights,
+                                                                          tmp_path):
+    train, test = effect_flights("none", seed=0)
+    m = np.concatenate([np.asarray(f["M"]) for f in fwid.load_flights(train)])
+    th = np.concatenate([np.asarray(f["theta"]) for f in fwid.load_flights(train)])
+    gain = 0.05 * np.std(m) / np.std(th)  # a twentieth of the measured M's spread
+    d = fwid.diagnose(fwid.load_flights(_with_load(train, tmp_path / "tr", "M", "theta", gain)),
+                      fwid.load_flights(_with_load(test, tmp_path / "te", "M", "theta", gain)))
+    assert d.verdict == "unexplained", (d.verdict, d.first_round)
+    assert d.verdict not in EFFECT_NAMES
+    assert d.unexplained["drivers"][0]["signal"] == "theta"
+    assert "M" in d.unexplained["affected"]
