@@ -13,21 +13,38 @@ from ._inputs import check_paths
 def diagnose(args) -> int:
     check_paths(args.train, args.test)
     import fwid
-    from fwid.report import diagnosis_summary, plot_gap_map, write_json
+    from fwid.report import (
+        diagnosis_summary,
+        identification_report,
+        parameters_csv,
+        plot_gap_map,
+        plot_gap_sim,
+        write_json,
+        write_text,
+    )
 
     t0 = time.perf_counter()
     train = fwid.load_flights(*args.train)
     test = fwid.load_flights(*args.test)
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
-    diag = fwid.diagnose(train, test, axis=args.axis, progress=say)
+    diag = fwid.diagnose(train, test, axis=args.axis, simulation=not args.no_simulation,
+                         progress=say)
     print(diagnosis_summary(diag))
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         plot_gap_map(diag, path=out / "gap_map.png")
+        written = ["diagnosis.json", "gap_map.png"]
+        if diag.models is not None:
+            plot_gap_sim(diag, path=out / "gap_sim.png")
+            written.append("gap_sim.png")
+            if diag.models.augmented is not None:  # the model to carry on with
+                rep = identification_report(diag.models.augmented)
+                write_json(out / "augmented_model.json", rep)
+                write_text(out / "augmented_parameters.csv", parameters_csv(rep["parameters"]))
+                written += ["augmented_model.json", "augmented_parameters.csv"]
         write_json(out / "diagnosis.json", diag.to_json())
-        print(f"\nfwid: diagnosis.json and gap_map.png in {out}/ "
-              f"({time.perf_counter() - t0:.1f} s)")
+        print(f"\nfwid: {', '.join(written)} in {out}/ ({time.perf_counter() - t0:.1f} s)")
     else:
         print("\nfwid: nothing written (give --out DIR for diagnosis.json and the gap map)")
     return 0

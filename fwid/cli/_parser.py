@@ -83,6 +83,9 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--test", nargs="+", required=True, metavar="DATA",
                    help="held-out flights the shrink is measured on")
     d.add_argument("--axis", choices=("lon", "lat"), default="lon", help="axis to diagnose")
+    d.add_argument("--no-simulation", action="store_true",
+                   help="skip the gap in the simulated states (the verdict's effects in the EOM, "
+                        "re-fitted by output error: the slowest step)")
     d.add_argument("--out", default=None,
                    help="folder for diagnosis.json and the figure (without it nothing is written)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")

@@ -15,6 +15,7 @@ from ._catalogue import CATALOGUE, Effect
 from ._disturbance import RED_MIN, colour, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES
+from ._simulation import SimulationGap, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, Half
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, signals
@@ -46,6 +47,8 @@ class Diagnosis:
     unexplained: dict | None = None
     disturbance: dict | None = None
     first_round: dict = dataclasses.field(default_factory=dict, repr=False)
+    simulation: dict | None = None
+    models: SimulationGap | None = dataclasses.field(default=None, repr=False)
     settings: dict = dataclasses.field(default_factory=dict)
 
     def candidate(self, name: str) -> dict:
@@ -76,6 +79,7 @@ class Diagnosis:
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
+            "simulation": self.simulation,
             "localisation": self.localisation,
             "first_round": self.first_round,
             "method": self.settings,
@@ -150,6 +154,7 @@ def diagnose(
     cutoff: float = 5.0,
     alpha: float = ALPHA,
     min_gain: float = MIN_GAIN,
+    simulation: bool = True,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """Diagnose the sim-to-real gap of the paper's model on held-out flights.
@@ -191,6 +196,9 @@ def diagnose(
     **Arguments:** `train`, `test` (flights), `axis` (`"lon"`/`"lat"`, the manoeuvre's axis),
     `catalogue`, `probes` (rivals outside the catalogue; `()` for none), `cutoff` (the split
     [Hz]), `alpha` (family-wise false-alarm level per selection round), `min_gain` (smallest typical held-out relative error drop that counts),
+    `simulation` (also measure the gap in the simulated states, `_simulation.py`: the
+    verdict's effects put into the EOM, re-estimated by output error on the training flights,
+    simulated on the test flights; `Diagnosis.models` keeps both identifications),
     `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
@@ -311,6 +319,7 @@ def diagnose(
         return [{ld: r[(ld, "averaged")] for ld in own} for r in res]
 
     effects, unexplained, model, prev = [], None, (), rms_before
+    in_sim = []  # (name, variant) of the verdict's effects, for the simulation
     for e, ev in sel.chosen:
         model = model + ((e, engine.best_variant(train_idx, model, e, sigma2)),)
         res = test_residuals(model)
@@ -321,15 +330,18 @@ def diagnose(
                "shrink_pct": shrink(prev, now, affected),
                "test_rms_before": prev, "test_rms_after": now}
         prev = now
-        if e.name in named:
+        if e.name in named and unexplained is None:
             effects.append(row)
+            in_sim.append((e.name, model[-1][1]))
+        elif e.name in named:  # after structure outside the catalogue: it may only echo it
+            unexplained["then"].append(row)
         elif unexplained is None:
             unexplained = {"probe": e.name, "description": e.description,
                            "drivers": drivers(engine, train_idx, e, model[-1][1], sigma2),
                            "test_shrink_pct": row["shrink_pct"], "p": ev.p,
                            "variant": row["variant"], "affected": affected,
                            "redness_after": colour(slow_part(res), dts, own,
-                                                   own_scale)["redness"]}
+                                                   own_scale)["redness"], "then": []}
 
     disturbance = colour(slow_part(base_res), dts, own, own_scale)
     disturbance.update(spectrum(slow_part(base_res), dts, own), red_min=RED_MIN)
@@ -340,6 +352,16 @@ def diagnose(
         verdict = "random-disturbance"
     elif verdict == "none" and disturbance["redness"] >= RED_MIN:
         verdict = "random-disturbance"
+    if verdict == "unexplained":
+        probe = next(e for e, _ in sel.chosen if e.name == unexplained["probe"])
+        in_sim = [(probe.name, engine.best_variant(train_idx, (), probe, sigma2))]
+    elif verdict not in named:
+        in_sim = []
+    sim = None
+    if simulation:
+        say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
+            + " fitted by output error on the training flights, simulated on the test flights")
+        sim = simulation_gap(train, test, axis, in_sim, cutoff)
 
     say("mapping the gap")
     measured = [{ld: s.loads["averaged"][ld] + s.loads["flapping"][ld] for ld in loads}
@@ -356,6 +378,8 @@ def diagnose(
         probes=probe_rows,
         unexplained=unexplained,
         disturbance=disturbance,
+        simulation=sim.summary if sim is not None else None,
+        models=sim,
         first_round={k: {"p": ev.p, "gain_pct": 100.0 * ev.gain, "t": ev.t}
                      for k, ev in sel.first.items()},
         localisation=localisation,

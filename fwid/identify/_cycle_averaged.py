@@ -106,6 +106,7 @@ def identify(
     joint: bool = False,
     cutoff: float = 5.0,
     noise_cutoff: float = 40.0,
+    start: str | GreyBoxModel = "least-squares",
     progress: bool = False,
 ) -> Identification:
     """Identify the cycle-averaged model from flights, as in the paper's Section IV.
@@ -115,7 +116,8 @@ def identify(
     gets its own fit (the paper's practice) and the summary model is the mean of their
     estimates; with `joint`, one parameter set is fitted to all flights together, each with
     its own initial state, trim and bias terms. Validation flights are simulated with the
-    summary model, their bias terms re-estimated.
+    summary model, their bias terms re-estimated. `start` is passed to [`fwid.fit`][]:
+    `"least-squares"`, `"model"` (the model's values) or a model whose values to start from.
     """
     model = get_model(model)
     flights = list(flights)
@@ -125,13 +127,13 @@ def identify(
     exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]
     names = [f.name for f in flights]
     if joint or len(exps) == 1:
-        fits = [fit(model, exps, names=names, progress=progress)]
+        fits = [fit(model, exps, names=names, start=start, progress=progress)]
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
             estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
     else:
-        fits = fit_each(model, exps, names=names, progress=progress)
+        fits = fit_each(model, exps, names=names, start=start, progress=progress)
         summary = _mean_model(model, fits)
         estimation = [evaluate(f.model, e, n, refit_local=False)
                       for f, e, n in zip(fits, exps, names)]

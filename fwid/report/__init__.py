@@ -14,7 +14,11 @@
 """
 
 from ._decomposition_plot import plot_decomposition as plot_decomposition
-from ._diagnosis import diagnosis_summary as diagnosis_summary, plot_gap_map as plot_gap_map
+from ._diagnosis import (
+    diagnosis_summary as diagnosis_summary,
+    plot_gap_map as plot_gap_map,
+    plot_gap_sim as plot_gap_sim,
+)
 from ._figures import plot_flight_fit as plot_flight_fit, plot_poles as plot_poles
 from ._overview import plot_fits_overview as plot_fits_overview
 from ._flapping import combined_report as combined_report, flapping_report as flapping_report

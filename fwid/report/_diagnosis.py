@@ -94,6 +94,17 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append(f"  and unexplained structure left: {u['description']}, p = {u['p']:.2g}, "
                      f"driven by {u['drivers'][0]['signal']}: a further "
                      f"{u['test_shrink_pct']:.1f} % on {'/'.join(u['affected'])}")
+    sim = d.simulation
+    if sim is not None:
+        change = ", ".join(f"{k} {sim['test_rms_before'][k]:.3g} -> {sim['test_rms_after'][k]:.3g}"
+                           for k in sim["states"])
+        lines.append(
+            "  in simulation: " + (f"with {' + '.join(sim['effects'])} in the EOM, re-fitted by "
+                                   f"output error, the test flights' simulated states shrink "
+                                   f"{sim['shrink_pct']:.1f} % ({change})"
+                                   if sim["effects"] else f"nothing added (state RMS {change})")
+            + (f"; not in the cycle-averaged EOM: {', '.join(sim['left_out'])}"
+               if sim["left_out"] else ""))
     lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'in-band shrink %':>16} "
                  f"{'overall %':>9} {'detect. limit %':>15}")
     for k, c in enumerate(d.candidates + d.probes):
@@ -164,6 +175,38 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
                        f": {c['effect']}\nheld-out RMS shrinks {_shrink_text(c)}", fontsize=9)
     ax[1, 1].set_ylim(0, 1.1)
     fig.suptitle(f"fwid diagnose ({d.axis}): verdict {d.verdict}")
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig
+
+
+def plot_gap_sim(d: Diagnosis, path: str | Path | None = None, flight: int = 0) -> Figure | None:
+    """One test flight's cycle-averaged states: measured, the baseline's simulation and the
+    augmented model's (the diagnosed effects in the EOM), both fitted on the training flights
+    by output error. `None` without a simulation block."""
+    if d.models is None:
+        return None
+    base = d.models.baseline.validation[flight]
+    aug = d.models.augmented.validation[flight] if d.models.augmented is not None else None
+    states = d.simulation["states"]
+    fig = Figure(figsize=(11, 1.9 * len(states) + 0.6), layout="constrained")
+    axs = fig.subplots(len(states), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, s in zip(axs, states):
+        scale = 180.0 / np.pi if s in ("q", "p", "r", "theta", "phi") else 1.0
+        unit = {"q": "deg/s", "p": "deg/s", "r": "deg/s", "theta": "deg", "phi": "deg"}.get(
+            s, "m/s")
+        ax.plot(base.t, scale * base.measured[s], "k", lw=1.0, label="measured")
+        ax.plot(base.t, scale * base.simulated[s], "C3", lw=1.0,
+                label=f"baseline (RMS {d.simulation['test_rms_before'][s] * scale:.3g})")
+        if aug is not None:
+            ax.plot(aug.t, scale * aug.simulated[s], "C2", lw=1.0,
+                    label=f"+ {' + '.join(d.simulation['effects'])} "
+                          f"(RMS {d.simulation['test_rms_after'][s] * scale:.3g})")
+        ax.set_ylabel(f"d{s} [{unit}]")
+        ax.legend(fontsize=7, loc="upper right")
+    axs[-1].set_xlabel("time [s]")
+    fig.suptitle(f"fwid diagnose ({d.axis}): test flight {base.name}, simulated states; "
+                 f"shrink {d.simulation['shrink_pct']:.1f} %")
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig

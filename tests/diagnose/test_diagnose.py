@@ -18,7 +18,7 @@ def _diagnose(train_dir, test_dir, axis="lon", shuffle=None):
     if shuffle is not None:
         random.Random(shuffle).shuffle(train)
         random.Random(shuffle + 1).shuffle(test)
-    return fwid.diagnose(train, test, axis=axis)
+    return fwid.diagnose(train, test, axis=axis, simulation=False)
 
 
 @pytest.mark.parametrize("effect", EFFECT_NAMES)

@@ -40,7 +40,8 @@ def test_gusts_are_a_random_disturbance(effect_flights):
     spectrum; the report says so."""
     from fwid.report import diagnosis_summary
 
-    d = fwid.diagnose(*_load(*effect_flights("turbulence", strength=1.0, seed=3)))
+    d = fwid.diagnose(*_load(*effect_flights("turbulence", strength=1.0, seed=3)),
+                      simulation=False)
     assert d.verdict == "random-disturbance"
     assert not any(c["significant"] for c in d.candidates)
     dist = d.disturbance
@@ -54,7 +55,8 @@ def test_a_control_log_that_trails_is_unexplained_not_actuator_dynamics(effect_f
     """The deflection acts before it is logged (a clock offset between the logs): the
     catalogue's actuator entry only lets it act after, so the answer is `unexplained`, driven
     by the elevator, never a catalogue name."""
-    d = fwid.diagnose(*_load(*effect_flights("sensor-offset", strength=1.0, seed=2)))
+    d = fwid.diagnose(*_load(*effect_flights("sensor-offset", strength=1.0, seed=2)),
+                      simulation=False)
     assert d.verdict == "unexplained", (d.verdict, d.first_round)
     assert d.unexplained["probe"] == "input-lead"
     assert d.unexplained["drivers"][0]["signal"] == "de"
@@ -86,7 +88,8 @@ def test_a_load_that_follows_the_attitude_is_unexplained_with_theta_first(effect
     th = np.concatenate([np.asarray(f["theta"]) for f in fwid.load_flights(train)])
     gain = 0.05 * np.std(m) / np.std(th)  # a twentieth of the measured M's spread
     d = fwid.diagnose(fwid.load_flights(_with_load(train, tmp_path / "tr", "M", "theta", gain)),
-                      fwid.load_flights(_with_load(test, tmp_path / "te", "M", "theta", gain)))
+                      fwid.load_flights(_with_load(test, tmp_path / "te", "M", "theta", gain)),
+                      simulation=False)
     assert d.verdict == "unexplained", (d.verdict, d.first_round)
     assert d.verdict not in EFFECT_NAMES
     assert d.unexplained["drivers"][0]["signal"] == "theta"
