@@ -44,9 +44,10 @@ def full_r_trouble(result) -> str | None:
         return f"ended with an ill-conditioned R (condition number {cond:.3g})"
     mark = model_error_signature(result)
     if mark is not None:
-        lag1, _, a, b, c = mark
+        colour, out_k, a, b, c = mark
         return (f"ended with residuals that model error, not measurement noise, makes "
-                f"(lag-1 autocorrelation {lag1:.3f}, {a} and {b} correlated {c:+.2f}), which "
+                f"(autocorrelation {colour:.3f} on {out_k} at the data's bandwidth, {a} and "
+                f"{b} correlated {c:+.2f}), which "
                 "a full R would weight the outputs by")
     return None
 

@@ -18,6 +18,7 @@ from ..models._greybox import GreyBoxModel
 from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments
 from ..simulate._simulate import simulate, simulate_sensitivities
+from ._colour import colour_at_bandwidth
 from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
@@ -69,6 +70,10 @@ class FitResult(eqx.Module):
     - `lag1`: each output's residual autocorrelation at one sample (the largest over the
       experiments): near 0 for white measurement noise, near 1 for coloured residuals
       (process noise or a missing effect).
+    - `colour`: each output's residual autocorrelation at the lag that spans half a period
+      at the data's bandwidth (`fwid.estimate._colour`; the largest over the experiments):
+      near 0 for measurement noise, white or pre-filtered, near 1 for model error. This,
+      not `lag1`, is what the model-error warning and `noise="auto"` read.
     - `residual_corr`: the correlation matrix of the residuals between the outputs (whatever
       R the fit used).
     """
@@ -91,6 +96,7 @@ class FitResult(eqx.Module):
     noise: str = eqx.field(static=True, default="full")
     lag1: Float[Array, " ny"] | None = None
     residual_corr: Float[Array, "ny ny"] | None = None
+    colour: Float[Array, " ny"] | None = None
 
     @property
     def params(self) -> dict:
@@ -212,7 +218,8 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
                 hist=state.search_state.history,
                 converged=sol.result == optx.RESULTS.successful, M=M, cov_cr=cov_cr,
                 cov=cov_c, lag1=jax.vmap(lag1_autocorrelation)(v, batch.mask),
-                residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)))
+                residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
+                colour=jax.vmap(colour_at_bandwidth)(v, batch.z, batch.mask))
 
 
 _fit_batch_jit = eqx.filter_jit(_fit_batch)
@@ -386,6 +393,7 @@ def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
         noise=noise,
         lag1=jnp.max(jnp.reshape(out["lag1"], (-1, len(model.outputs))), axis=0),
         residual_corr=out["residual_corr"],
+        colour=jnp.max(jnp.reshape(out["colour"], (-1, len(model.outputs))), axis=0),
     )
     found = fit_warnings(result, names, max_steps, information=out["M"])
     return dataclasses.replace(result, warnings=tuple(found))
