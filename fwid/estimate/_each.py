@@ -13,7 +13,7 @@ from jax.sharding import PartitionSpec
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment, stack_experiments
+from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ._devices import device_count, flight_mesh, padded_count
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result
@@ -63,7 +63,7 @@ def fit_each(
     **Returns:** one [`fwid.FitResult`][] per experiment, in order.
     """
     check_noise(noise)
-    exps = list(experiments)
+    exps = [with_measured_x0(model, e) for e in experiments]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight

@@ -16,7 +16,7 @@ from jaxtyping import Array, Bool, Float, Int
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._checks import check_experiment
-from ..simulate._experiment import Experiment, stack_experiments
+from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ..simulate._simulate import simulate, simulate_sensitivities
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import (
@@ -300,11 +300,13 @@ def fit(
 
     **Raises:** [`fwid.InputError`][] when an experiment's time axis is not uniform or its
     `u`, `z`, `x0` do not match the model's inputs, outputs and states (or `x0` is missing
-    where the outputs are not the states), [`fwid.ExcitationError`][] when the data cannot
+    where the outputs are not the states and do not include them all; where they include
+    them, a missing `x0` is their first measured sample), [`fwid.ExcitationError`][] when the data cannot
     identify a parameter, [`fwid.FitDivergedError`][] when the cost cannot be made finite.
     """
     check_noise(noise)
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
+    exps = [with_measured_x0(model, e) for e in exps]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
     n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
