@@ -16,7 +16,7 @@ from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ._devices import device_count, flight_mesh, padded_count
 from ._noise import check_noise, fall_back
-from ._output_error import FitResult, _fit_batch, _prepare, _result
+from ._output_error import FitResult, _fit_batch, _prepare, _result, with_instability
 from ._warnings import issue
 
 
@@ -95,6 +95,7 @@ def fit_each(
     results = run(list(range(len(exps))), noise == "diagonal")
     if noise == "auto":
         results = fall_back(results, lambda idx: run(idx, True), [[n] for n in names], progress)
+    results = [with_instability(r, [e], [n]) for r, e, n in zip(results, exps, names)]
     issue([w for r in results for w in r.warnings])
     if progress:
         ok = sum(bool(r.converged) for r in results)

@@ -25,6 +25,7 @@ from ._gauss_newton import (
     jacobian_once,
 )
 from ._noise import check_noise, fall_back
+from ._stability import instability_warning
 from ._start import least_squares_start
 from ._uncertainty import (
     coloured_residual_middle,
@@ -63,7 +64,9 @@ class FitResult(eqx.Module):
     - `converged`: whether the cost and the parameters settled within tolerance.
     - `start`: the least-squares start values of the free parameters.
     - `warnings`: what should not be trusted about this fit (not converged, R
-      ill-conditioned, parameters correlated beyond 0.98, not finite), one sentence each;
+      ill-conditioned, residuals of model error or process noise, an unstable model growing
+      beyond 100-fold over the record, parameters correlated beyond 0.98, not finite), one
+      sentence each;
       [`fwid.fit`][] also issues each as a [`fwid.FitWarning`][].
     - `noise`: the R the estimates belong to, `"full"` or `"diagonal"` (with `noise="auto"`
       a diagonal R replaces a full one that failed, see `fwid.estimate._noise`).
@@ -331,6 +334,7 @@ def fit(
         except FitDivergedError as e:  # a diagonal R may still rescue it
             first = e
         result = fall_back([first], lambda idx: [run(True)], [names], progress)[0]
+    result = with_instability(result, exps, names)
     issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
@@ -338,6 +342,16 @@ def fit(
               f"({int(result.passes)} R relaxations), {time.perf_counter() - t0:.1f} s",
               flush=True)
     return result
+
+
+def with_instability(result: FitResult, exps, names) -> FitResult:
+    """`result` with the warning of an unstable identified model added, if there is one
+    (`fwid.estimate._stability`)."""
+    note = instability_warning(result.flight_model(0) if len(exps) > 1 else result.model,
+                               exps, names)
+    if note is None:
+        return result
+    return dataclasses.replace(result, warnings=(*result.warnings, note))
 
 
 def _prepare(model, exps, names, start, n_local):
