@@ -9,7 +9,7 @@ R. V. Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., AIAA 2015, S
 
 Zq is held at its start value, as in the book. Data: ``unStabAC_sim.asc`` (251 samples,
 0.05 s); x0 = the first measured w, q (as the book). The short-period mode is unstable (the
-true Mw > 0 gives a real eigenvalue of about +2 1/s), so a plain output-error simulation of
+true Mw > 0 gives a real eigenvalue of about +0.69 1/s), so a plain output-error simulation of
 the 12.5 s record grows by orders of magnitude away from the data for any parameter error:
 the book uses this record to motivate stabilised output error, filter error and multiple
 shooting (Sec. 9.16).

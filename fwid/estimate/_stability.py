@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import equinox as eqx
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
@@ -23,14 +24,19 @@ from ..models._greybox import GreyBoxModel
 GROWTH_MAX = 100.0
 
 
+@eqx.filter_jit
+def _state_matrix(model: GreyBoxModel, consts, x0, u0):
+    """`A = df/dx` at `x0`, `u0`: compiled once per model (the parameters are arguments)."""
+    return model.state_matrices(model.params, consts, x0, u0)[0]
+
+
 def fastest_growth(model: GreyBoxModel, exp) -> float:
     """The largest real part of the eigenvalues of `A = df/dx` (1/s), linearised at the
     experiment's initial state and first input (the perturbation models' trim is near there;
     a model in absolute states needs a real flight condition, which `x0` is)."""
     if not model.states:
         return float("-inf")
-    A, _ = model.state_matrices(model.params, exp.consts, exp.x0, exp.u[0])
-    A = np.asarray(A, dtype=float)
+    A = np.asarray(_state_matrix(model, exp.consts, exp.x0, exp.u[0]), dtype=float)
     if not np.all(np.isfinite(A)):
         return float("-inf")
     return float(np.max(np.linalg.eigvals(A).real))

@@ -103,10 +103,17 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
     if not bool(result.converged):
         cap = f" (max_steps={max_steps})" if max_steps is not None else ""
         steps = int(result.steps)
-        out.append(f"{who} did not converge in {steps} Gauss-Newton "
-                   f"step{'s' if steps != 1 else ''}{cap}: "
-                   "the estimates may be far from the optimum; raise max_steps, try "
-                   "noise='diagonal' or better start values")
+        if max_steps is not None and steps < max_steps:  # stopped early, not at the cap
+            out.append(f"{who} did not converge: it stopped after {steps} Gauss-Newton "
+                       f"step{'s' if steps != 1 else ''}{cap} because no shorter step "
+                       "lowered the cost (a flat or ragged likelihood there); the estimates "
+                       "may be far from the optimum; try noise='diagonal' or better start "
+                       "values")
+        else:
+            out.append(f"{who} did not converge in {steps} Gauss-Newton "
+                       f"step{'s' if steps != 1 else ''}{cap}: "
+                       "the estimates may be far from the optimum; raise max_steps, try "
+                       "noise='diagonal' or better start values")
     cond = r_condition(result.R)
     if cond > R_COND_MAX:
         out.append(f"{who}: the noise covariance R is ill-conditioned (condition number "

@@ -53,3 +53,9 @@ def test_turbulence_record_does_not_pass_for_a_converged_fit():
     assert any("strongly coloured" in m and "process noise" in m and "filter-error" in m
                for m in caught), caught
     assert not bool(res.converged) or res.noise == "diagonal"
+    if not bool(res.converged) and res.noise == "full":  # noise="auto" tried a diagonal R
+        assert any("the refit with a diagonal R did not converge either" in m
+                   for m in caught), caught
+    if not bool(res.converged) and int(res.steps) < 60:  # stopped early: not "raise max_steps"
+        assert any("stopped after" in m and "no shorter step lowered the cost" in m
+                   for m in caught), caught
