@@ -112,8 +112,9 @@ class GreyBoxModel(eqx.Module):
     @property
     def measured_states(self) -> tuple[int, ...] | None:
         """The output column of each state, when every state is also an output of the same
-        name (e.g. states p, r among outputs pdot, rdot, ay, p, r); `None` otherwise."""
-        if not all(s in self.outputs for s in self.states):
+        name (e.g. states p, r among outputs pdot, rdot, ay, p, r); `None` otherwise (and for
+        a model without states)."""
+        if not self.states or not all(s in self.outputs for s in self.states):
             return None
         return tuple(self.outputs.index(s) for s in self.states)
 
