@@ -13,10 +13,10 @@ from jax.sharding import PartitionSpec
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment, stack_experiments
+from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ._devices import device_count, flight_mesh, padded_count
 from ._noise import check_noise, fall_back
-from ._output_error import FitResult, _fit_batch, _prepare, _result
+from ._output_error import FitResult, _fit_batch, _prepare, _result, with_instability
 from ._warnings import issue
 
 
@@ -63,7 +63,7 @@ def fit_each(
     **Returns:** one [`fwid.FitResult`][] per experiment, in order.
     """
     check_noise(noise)
-    exps = list(experiments)
+    exps = [with_measured_x0(model, e) for e in experiments]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
@@ -95,6 +95,7 @@ def fit_each(
     results = run(list(range(len(exps))), noise == "diagonal")
     if noise == "auto":
         results = fall_back(results, lambda idx: run(idx, True), [[n] for n in names], progress)
+    results = [with_instability(r, [e], [n]) for r, e, n in zip(results, exps, names)]
     issue([w for r in results for w in r.warnings])
     if progress:
         ok = sum(bool(r.converged) for r in results)

@@ -44,18 +44,24 @@ def full_r_trouble(result) -> str | None:
         return f"ended with an ill-conditioned R (condition number {cond:.3g})"
     mark = model_error_signature(result)
     if mark is not None:
-        lag1, _, a, b, c = mark
+        colour, out_k, a, b, c = mark
         return (f"ended with residuals that model error, not measurement noise, makes "
-                f"(lag-1 autocorrelation {lag1:.3f}, {a} and {b} correlated {c:+.2f}), which "
+                f"(autocorrelation {colour:.3f} on {out_k} at the data's bandwidth, {a} and "
+                f"{b} correlated {c:+.2f}), which "
                 "a full R would weight the outputs by")
     return None
 
 
 def choose(full, diagonal, reason: str, flights) -> object:
     """The diagonal-R fit when it converged (noting why the full one was dropped), else the
-    full-R fit as it was."""
-    if diagonal is None or not bool(diagonal.converged):
+    full-R fit (noting that the diagonal-R refit did not converge either)."""
+    if diagonal is None:
         return full
+    if not bool(diagonal.converged):
+        note = (f"{', '.join(flights)}: the {full.model.name} fit with a full R {reason}, and "
+                "the refit with a diagonal R did not converge either; the estimates are "
+                "those of the full R")
+        return dataclasses.replace(full, warnings=(*full.warnings, note))
     note = (f"{', '.join(flights)}: the {full.model.name} fit with a full R {reason}; the "
             "estimates are those of a diagonal R (noise='diagonal'), which converged; "
             "pass noise='full' to keep the full R")

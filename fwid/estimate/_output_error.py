@@ -16,14 +16,16 @@ from jaxtyping import Array, Bool, Float, Int
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._checks import check_experiment
-from ..simulate._experiment import Experiment, stack_experiments
+from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ..simulate._simulate import simulate, simulate_sensitivities
+from ._colour import colour_at_bandwidth
 from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
     jacobian_once,
 )
 from ._noise import check_noise, fall_back
+from ._stability import instability_warning
 from ._start import least_squares_start
 from ._uncertainty import (
     coloured_residual_middle,
@@ -62,13 +64,19 @@ class FitResult(eqx.Module):
     - `converged`: whether the cost and the parameters settled within tolerance.
     - `start`: the least-squares start values of the free parameters.
     - `warnings`: what should not be trusted about this fit (not converged, R
-      ill-conditioned, parameters correlated beyond 0.98, not finite), one sentence each;
+      ill-conditioned, residuals of model error or process noise, an unstable model growing
+      beyond 100-fold over the record, parameters correlated beyond 0.98, not finite), one
+      sentence each;
       [`fwid.fit`][] also issues each as a [`fwid.FitWarning`][].
     - `noise`: the R the estimates belong to, `"full"` or `"diagonal"` (with `noise="auto"`
       a diagonal R replaces a full one that failed, see `fwid.estimate._noise`).
     - `lag1`: each output's residual autocorrelation at one sample (the largest over the
       experiments): near 0 for white measurement noise, near 1 for coloured residuals
       (process noise or a missing effect).
+    - `colour`: each output's residual autocorrelation at the lag that spans half a period
+      at the data's bandwidth (`fwid.estimate._colour`; the largest over the experiments):
+      near 0 for measurement noise, white or pre-filtered, near 1 for model error. This,
+      not `lag1`, is what the model-error warning and `noise="auto"` read.
     - `residual_corr`: the correlation matrix of the residuals between the outputs (whatever
       R the fit used).
     """
@@ -91,6 +99,7 @@ class FitResult(eqx.Module):
     noise: str = eqx.field(static=True, default="full")
     lag1: Float[Array, " ny"] | None = None
     residual_corr: Float[Array, "ny ny"] | None = None
+    colour: Float[Array, " ny"] | None = None
 
     @property
     def params(self) -> dict:
@@ -212,7 +221,8 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
                 hist=state.search_state.history,
                 converged=sol.result == optx.RESULTS.successful, M=M, cov_cr=cov_cr,
                 cov=cov_c, lag1=jax.vmap(lag1_autocorrelation)(v, batch.mask),
-                residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)))
+                residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
+                colour=jax.vmap(colour_at_bandwidth)(v, batch.z, batch.mask))
 
 
 _fit_batch_jit = eqx.filter_jit(_fit_batch)
@@ -293,11 +303,13 @@ def fit(
 
     **Raises:** [`fwid.InputError`][] when an experiment's time axis is not uniform or its
     `u`, `z`, `x0` do not match the model's inputs, outputs and states (or `x0` is missing
-    where the outputs are not the states), [`fwid.ExcitationError`][] when the data cannot
+    where the outputs are not the states and do not include them all; where they include
+    them, a missing `x0` is their first measured sample), [`fwid.ExcitationError`][] when the data cannot
     identify a parameter, [`fwid.FitDivergedError`][] when the cost cannot be made finite.
     """
     check_noise(noise)
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
+    exps = [with_measured_x0(model, e) for e in exps]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
     n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
@@ -322,6 +334,7 @@ def fit(
         except FitDivergedError as e:  # a diagonal R may still rescue it
             first = e
         result = fall_back([first], lambda idx: [run(True)], [names], progress)[0]
+    result = with_instability(result, exps, names)
     issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
@@ -329,6 +342,16 @@ def fit(
               f"({int(result.passes)} R relaxations), {time.perf_counter() - t0:.1f} s",
               flush=True)
     return result
+
+
+def with_instability(result: FitResult, exps, names) -> FitResult:
+    """`result` with the warning of an unstable identified model added, if there is one
+    (`fwid.estimate._stability`)."""
+    note = instability_warning(result.flight_model(0) if len(exps) > 1 else result.model,
+                               exps, names)
+    if note is None:
+        return result
+    return dataclasses.replace(result, warnings=(*result.warnings, note))
 
 
 def _prepare(model, exps, names, start, n_local):
@@ -386,6 +409,7 @@ def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
         noise=noise,
         lag1=jnp.max(jnp.reshape(out["lag1"], (-1, len(model.outputs))), axis=0),
         residual_corr=out["residual_corr"],
+        colour=jnp.max(jnp.reshape(out["colour"], (-1, len(model.outputs))), axis=0),
     )
     found = fit_warnings(result, names, max_steps, information=out["M"])
     return dataclasses.replace(result, warnings=tuple(found))

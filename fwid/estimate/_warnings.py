@@ -23,13 +23,16 @@ from .._errors import FitWarning
 R_COND_MAX = 1e8
 #: Parameter pairs correlated beyond this (in absolute value) are reported.
 CORR_MAX = 0.98
-#: Residuals whose autocorrelation at one sample exceeds this are strongly coloured ...
-COLOURED_LAG1 = 0.8
+#: Residuals whose autocorrelation at the data's bandwidth (`FitResult.colour`, see
+#: `fwid.estimate._colour`) exceeds this are strongly coloured ... Measured: at most 0.20 for
+#: the measurement noise of the low-passed DelFly demo flights (whose autocorrelation at one
+#: sample is 0.997), 0.90-0.998 for the model error of the textbook records; 0.5 lies between.
+COLOURED = 0.5
 #: ... and, correlated between two outputs beyond this, carry the mark of model error (process
 #: noise or a missing effect) rather than of measurement noise. On the textbook cases of
 #: `benchmarks/textbook_cases.py` the residual correlations are 0.57 (FVSysID TC01, ay and
-#: p), 0.85 (TC04) and 0.93 (SIDPAC Twin Otter), all with lag-1 autocorrelations of 0.84-1;
-#: on simulated cycle-averaged DelFly flights (`fwid.identify`) at most 0.43.
+#: p), 0.85 (TC04) and 0.93 (SIDPAC Twin Otter); on simulated cycle-averaged DelFly flights
+#: (`fwid.identify`) up to 0.58, with white residuals at the data's bandwidth.
 MODEL_ERROR_CORR = 0.5
 
 
@@ -65,19 +68,21 @@ def collinear_pairs(M: Float[ArrayLike, "p p"], names: Sequence[str],
 
 
 def model_error_signature(result) -> tuple[float, str, str, str, float] | None:
-    """`(lag1, output, a, b, corr)` when the fit's residuals are strongly coloured (largest
-    lag-1 autocorrelation `lag1`, on `output`) and correlated between outputs `a` and `b`
-    beyond [`MODEL_ERROR_CORR`][] (`corr`); `None` otherwise (or when the result does not
-    carry the residual statistics)."""
-    if result.lag1 is None or result.residual_corr is None:
+    """`(colour, output, a, b, corr)` when the fit's residuals are strongly coloured at the
+    data's bandwidth (largest autocorrelation `colour` there, on `output`, beyond
+    [`COLOURED`][]) and correlated between outputs `a` and `b` beyond
+    [`MODEL_ERROR_CORR`][] (`corr`); `None` otherwise (or when the result does not carry the
+    residual statistics)."""
+    colour = getattr(result, "colour", None)
+    if colour is None or result.residual_corr is None:
         return None
-    lag1 = np.asarray(result.lag1, dtype=float)
+    colour = np.asarray(colour, dtype=float)
     outputs = result.model.outputs
     pairs = correlated_pairs(result.residual_corr, outputs, MODEL_ERROR_CORR)
-    if not pairs or not np.nanmax(lag1) > COLOURED_LAG1:
+    if not pairs or not np.nanmax(colour) > COLOURED:
         return None
-    k = int(np.nanargmax(lag1))
-    return float(lag1[k]), outputs[k], *pairs[0]
+    k = int(np.nanargmax(colour))
+    return float(colour[k]), outputs[k], *pairs[0]
 
 
 def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
@@ -98,10 +103,17 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
     if not bool(result.converged):
         cap = f" (max_steps={max_steps})" if max_steps is not None else ""
         steps = int(result.steps)
-        out.append(f"{who} did not converge in {steps} Gauss-Newton "
-                   f"step{'s' if steps != 1 else ''}{cap}: "
-                   "the estimates may be far from the optimum; raise max_steps, try "
-                   "noise='diagonal' or better start values")
+        if max_steps is not None and steps < max_steps:  # stopped early, not at the cap
+            out.append(f"{who} did not converge: it stopped after {steps} Gauss-Newton "
+                       f"step{'s' if steps != 1 else ''}{cap} because no shorter step "
+                       "lowered the cost (a flat or ragged likelihood there); the estimates "
+                       "may be far from the optimum; try noise='diagonal' or better start "
+                       "values")
+        else:
+            out.append(f"{who} did not converge in {steps} Gauss-Newton "
+                       f"step{'s' if steps != 1 else ''}{cap}: "
+                       "the estimates may be far from the optimum; raise max_steps, try "
+                       "noise='diagonal' or better start values")
     cond = r_condition(result.R)
     if cond > R_COND_MAX:
         out.append(f"{who}: the noise covariance R is ill-conditioned (condition number "
@@ -109,12 +121,14 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
                    "or noise-free; try noise='diagonal'")
     mark = model_error_signature(result)
     if mark is not None:
-        lag1, out_k, a, b, c = mark
-        out.append(f"{who}: the residuals are strongly coloured (lag-1 autocorrelation "
-                   f"{lag1:.3f} on {out_k}) and correlated between outputs ({a} and {b}: "
+        colour, out_k, a, b, c = mark
+        out.append(f"{who}: the residuals are strongly coloured (autocorrelation "
+                   f"{colour:.3f} on {out_k} at the data's bandwidth) and correlated "
+                   f"between outputs ({a} and {b}: "
                    f"{c:+.2f}): process noise or a missing effect, not measurement noise; "
-                   "check the model for missing terms; the standard deviations `std` allow "
-                   "for the colour, `std_cr` does not")
+                   "check the model for missing terms; with process noise (turbulence) "
+                   "output-error estimates are biased (a filter-error fit models it); the "
+                   "standard deviations `std` allow for the colour, `std_cr` does not")
     pairs = correlated_pairs(result.corr, result.names)
     if not pairs and information is not None and not np.all(np.isfinite(np.asarray(result.corr))):
         pairs = collinear_pairs(information, result.names)

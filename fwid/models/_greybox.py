@@ -109,6 +109,15 @@ class GreyBoxModel(eqx.Module):
     def outputs_are_states(self) -> bool:
         return self.h is _identity_output
 
+    @property
+    def measured_states(self) -> tuple[int, ...] | None:
+        """The output column of each state, when every state is also an output of the same
+        name (e.g. states p, r among outputs pdot, rdot, ay, p, r); `None` otherwise (and for
+        a model without states)."""
+        if not self.states or not all(s in self.outputs for s in self.states):
+            return None
+        return tuple(self.outputs.index(s) for s in self.states)
+
     def with_params(self, values: Mapping[str, float] | None = None, **kw) -> "GreyBoxModel":
         """A copy with some parameter values replaced."""
         new = dict(self.params)

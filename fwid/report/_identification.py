@@ -21,12 +21,22 @@ def eig_list(eigs) -> list:
 
 
 def fit_info(fit, outputs) -> dict:
-    """The `fit` block of a report: convergence, steps, cost and the noise covariance R."""
+    """The `fit` block of a report: convergence, steps, cost, the noise covariance R (and
+    which: `noise`) and the residual colour at the data's bandwidth (`residual_colour`)."""
     return {"converged": bool(fit.converged), "passes": int(fit.passes),
             "gauss_newton_steps": int(fit.steps), "cost": float(fit.cost),
             "R": np.asarray(fit.R), "noise": getattr(fit, "noise", "full"),
             "outputs": list(outputs),
+            "residual_colour": _colour(fit, outputs),
             "warnings": list(getattr(fit, "warnings", ()))}
+
+
+def _colour(fit, outputs) -> dict | None:
+    """Each output's residual autocorrelation at the data's bandwidth (`FitResult.colour`)."""
+    colour = getattr(fit, "colour", None)
+    if colour is None:
+        return None
+    return {k: float(v) for k, v in zip(outputs, np.asarray(colour))}
 
 
 def fit_warnings_of(fits) -> list[str]:

@@ -89,8 +89,9 @@ def check_experiment(model: GreyBoxModel, exp, name: str = "Experiment") -> None
     if getattr(exp, "x0_from_z", False) and not model.outputs_are_states:
         raise InputError(
             f"{name}: no x0 was given, and the {model.name} model's outputs "
-            f"({names(model.outputs)}) are not its states ({names(model.states)}), so the "
-            "initial state cannot be taken from the first measured sample; pass it: "
+            f"({names(model.outputs)}) are not its states ({names(model.states)}) and do not "
+            "include them all, so the initial state cannot be taken from the first measured "
+            "sample; pass it: "
             f"fwid.Experiment(t, u, z, x0=[{', '.join(model.states)}] at t[0])")
     if exp.x0.shape[-1:] != (nx,):
         raise InputError(

@@ -106,6 +106,19 @@ def experiment(flight, model, *, x0: str = "first") -> Experiment:
     return exp
 
 
+def with_measured_x0(model, exp: Experiment) -> Experiment:
+    """`exp` with `x0` taken from the first sample of the measured states when it was not
+    given and the model's states are among its outputs (`model.measured_states`, e.g. the
+    states w, q of the outputs az, w, q); `exp` itself otherwise (where the outputs are the
+    states `x0` is already `z[0]`; where the states are not measured, the check of
+    [`check_experiment`][] asks for `x0`). `model`: a [`fwid.GreyBoxModel`][]."""
+    idx = model.measured_states
+    if not exp.x0_from_z or model.outputs_are_states or idx is None:
+        return exp
+    return Experiment(exp.t, exp.u, exp.z, x0=exp.z[0, np.asarray(idx)], consts=exp.consts,
+                      mask=exp.mask, forces=exp.forces)
+
+
 def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Experiment:
     """Pad experiments to a common length and stack them along a leading batch axis.
 

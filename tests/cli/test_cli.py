@@ -273,6 +273,10 @@ def test_identify_report_has_an_empty_warnings_list_when_all_is_well(identified)
     _, out = identified
     report = json.loads((out / "report.json").read_text())
     assert report["warnings"] == []
+    # the low-passed demo flights' residuals are white at the data's bandwidth: full R kept
+    assert report["fit"]["noise"] == "full"
+    colour = report["fit"]["residual_colour"]
+    assert set(colour) == {"q", "u", "w", "theta"} and max(colour.values()) < 0.5
 
 
 def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatch, capsys):

@@ -34,8 +34,7 @@ from fwid.sensitivity import (
     rank_sensitivities,
 )
 
-# noise="full": these tests check Eqs. 10-11 with the full R (the default may fall back to a diagonal R)
-TIGHT = dict(rtol=1e-12, cost_rtol=1e-15, max_passes=30, noise="full")
+TIGHT = dict(rtol=1e-12, cost_rtol=1e-15, max_passes=30)
 REL = 1e-5  # relative finite-difference step
 CUTOFF = 5.0
 
