@@ -9,7 +9,9 @@ Writes ``{case: {param: {"value": .., "std": ..}}}`` for
 * ``tc04_oem``: FVSysID test case 4, HFB-320 longitudinal nonlinear model, 7 outputs
   (`_tc04.py`);
 * ``twin_otter_tlonss``: SIDPAC's Twin Otter `tlonss` demo, outputs alpha, q, az, ``p1..p9``
-  (`_twin_otter.py`).
+  (`_twin_otter.py`);
+* ``tc08``: FVSysID test case 8, the unstable aircraft, by ``method="multiple-shooting"``
+  (`_tc08.py`, `_method_cases.py`; with the errors from the true values);
 
 ``--reference`` also fits each case with the independent numpy/scipy estimator
 (`_baseline.py`, diagonal R as FVSysID and SIDPAC) and adds, per case, the key
@@ -32,13 +34,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _tc01  # noqa: E402
 import _tc04  # noqa: E402
 import _twin_otter  # noqa: E402
+from _method_cases import RUNNERS  # noqa: E402
 from _textbook import agreement, as_table, fit_fwid, fit_reference, fwid_table  # noqa: E402
 
 CASES = {"tc01": lambda: _tc01.CASE, "tc04_oem": lambda: _tc04.CASE,
          "twin_otter_tlonss": _twin_otter.case}
+ALL = (*CASES, *RUNNERS)
 
 
 def run_case(key: str, reference: bool) -> dict:
+    if key in RUNNERS:  # another method than plain output error: no scipy reference
+        return RUNNERS[key]()
     case = CASES[key]()
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True):
@@ -84,7 +90,7 @@ def main(argv=None):
     ap.add_argument("--json", required=True, help="where to write the estimates")
     ap.add_argument("--reference", action="store_true",
                     help="also fit the independent reference and compare")
-    ap.add_argument("--cases", default=",".join(CASES), help="comma-separated case keys")
+    ap.add_argument("--cases", default=",".join(ALL), help="comma-separated case keys")
     args = ap.parse_args(argv)
     out = {k: run_case(k, args.reference) for k in args.cases.split(",")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)

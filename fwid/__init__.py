@@ -57,6 +57,7 @@ EXPORTS = {
     ),
     "estimate": (
         "RelaxedGaussNewton", "FitResult", "fit", "fit_each", "least_squares_start",
+        "fit_shooting",
     ),
     "diagnose": (
         "CATALOGUE", "Diagnosis", "diagnose",

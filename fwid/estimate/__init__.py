@@ -8,3 +8,4 @@ from ._uncertainty import (
 )
 from ._local import refit_local_affine as refit_local_affine
 from ._warnings import fit_warnings as fit_warnings
+from ._shooting import fit_shooting as fit_shooting

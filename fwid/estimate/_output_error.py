@@ -18,6 +18,7 @@ from ..models._greybox import GreyBoxModel
 from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments
 from ..simulate._simulate import simulate, simulate_sensitivities
+from ._instability import instability_warnings
 from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
@@ -260,6 +261,8 @@ def fit(
     cost_rtol: float = 1e-10,
     local_per_flight: bool = True,
     progress: bool = False,
+    method: str = "output-error",
+    **options,
 ) -> FitResult:
     """Estimate the free parameters of `model` by output-error maximum likelihood.
 
@@ -288,6 +291,10 @@ def fit(
     - `local_per_flight`: with several experiments, estimate the model's `local` parameters
       (bias terms) separately for each one (named `name@i`); otherwise they are shared.
     - `progress`: print a line when the fit starts and ends.
+    - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
+      (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
+      `"filter-error"` for data with process noise (`fwid.estimate._filter_error`).
+    - `options`: the chosen method's own options.
 
     **Returns:** a [`fwid.FitResult`][].
 
@@ -299,6 +306,11 @@ def fit(
     check_noise(noise)
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    if method != "output-error" or options:
+        from ._methods import fit_method
+        return fit_method(method, model, exps, options, names=names, start=start, noise=noise,
+                          max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
+                          progress=progress, **options)
     t0 = time.perf_counter()
     n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
     start_model, theta0 = _prepare(model, exps, names, start, n_local)
@@ -322,6 +334,8 @@ def fit(
         except FitDivergedError as e:  # a diagonal R may still rescue it
             first = e
         result = fall_back([first], lambda idx: [run(True)], [names], progress)[0]
+    result = dataclasses.replace(result, warnings=(*result.warnings, *instability_warnings(
+        start_model, result.model, exps, names)))
     issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
