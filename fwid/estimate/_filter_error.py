@@ -103,13 +103,16 @@ def whiteness(nu, mask, outputs: Sequence[str], lags: int = WHITENESS_LAGS) -> d
     return out
 
 
-def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment):
-    """The innovations of one experiment (Eqs. 5.45-5.47) and the filter's `K`, `P`, `C`."""
+def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment, gain: bool = True):
+    """The innovations of one experiment (Eqs. 5.45-5.47) and the filter's `K`, `P`, `C`
+    (with `gain=False`, `K = 0`: the output-error residuals)."""
     u0 = e.u[0]
     A = jax.jacfwd(model.f, argnums=0)(e.x0, u0, params, e.consts)  # Eq. (5.50)
     C = jax.jacfwd(model.h, argnums=0)(e.x0, u0, params, e.consts)  # Eq. (5.51)
     dt = e.t[1] - e.t[0]
     K, P = steady_state_gain(A, C, jnp.diag(fdiag**2), Rk, dt)
+    if not gain:
+        K, P = jnp.zeros_like(K), jnp.zeros_like(P)
     u_next = jnp.concatenate([e.u[1:], e.u[-1:]], axis=0)
 
     def step(x, data):
@@ -122,9 +125,9 @@ def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment):
     return nus, K, P, C
 
 
-def _innovations(model, theta, Rk, batch, p):
+def _innovations(model, theta, Rk, batch, p, gain=True):
     params = model.merge(theta[:p])
-    return jax.vmap(lambda e: _filter(model, params, theta[p:], Rk, e))(batch)
+    return jax.vmap(lambda e: _filter(model, params, theta[p:], Rk, e, gain))(batch)
 
 
 @eqx.filter_jit
@@ -158,8 +161,7 @@ def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol)
 @eqx.filter_jit
 def _output_error_r(model, theta, batch, p, diagonal):
     """R (Eq. 11) of the residuals with `K = 0` (F = 0): the book's initial R (Sec. 5.6)."""
-    th = theta.at[p:].set(0.0)
-    v = _innovations(model, th, jnp.eye(batch.z.shape[-1]), batch, p)[0]
+    v = _innovations(model, theta, jnp.eye(batch.z.shape[-1]), batch, p, gain=False)[0]
     return noise_covariance(v, jnp.sum(batch.mask), diagonal, jnp.zeros(v.shape[-1]))
 
 

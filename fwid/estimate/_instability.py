@@ -1,4 +1,7 @@
-"""Unstable models under output error: a warning that points to multiple shooting.
+"""Where plain output error is the wrong method: warnings that point to the right one.
+
+Unstable models under output error point to multiple shooting; residuals coloured by process
+noise point to the filter-error method.
 
 Output error integrates the model over the whole record from one initial state (Eqs. 10-11).
 When the model (at the start values or at the estimate) has an unstable mode whose growth
@@ -18,6 +21,7 @@ import numpy as np
 
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment
+from ._warnings import model_error_signature
 
 #: A mode whose amplitude grows by more than this factor over the record makes output error's
 #: simulation diverge (for practical purposes).
@@ -58,4 +62,19 @@ def instability_warnings(start_model: GreyBoxModel, model: GreyBoxModel,
                 "output error's simulation diverges on an unstable vehicle and pulls the "
                 "estimates towards a stable model: fit with method='multiple-shooting'")
             break
+    return out
+
+
+def method_hints(start_model: GreyBoxModel, result, exps: Sequence[Experiment],
+                 names: Sequence[str]) -> list[str]:
+    """The warnings of an output-error `result` that point to another method of
+    [`fwid.fit`][]: [`instability_warnings`][], and, when the residuals bear the mark of model
+    error (coloured and correlated between outputs, `fwid.estimate._warnings`), the
+    filter-error method for flights in turbulence (process noise)."""
+    out = instability_warnings(start_model, result.model, exps, names)
+    if model_error_signature(result) is not None:
+        out.append(f"{', '.join(names)}: the {result.model.name} output-error residuals are "
+                   "coloured: if the vehicle flew in turbulence or its own wake (process "
+                   "noise), fit with method='filter-error' (a Kalman filter in the "
+                   "likelihood), whose innovations should then be white")
     return out

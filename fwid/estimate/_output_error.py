@@ -18,7 +18,7 @@ from ..models._greybox import GreyBoxModel
 from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments
 from ..simulate._simulate import simulate, simulate_sensitivities
-from ._instability import instability_warnings
+from ._instability import method_hints
 from ._gauss_newton import (
     NoiseModel,
     RelaxedGaussNewton,
@@ -334,8 +334,8 @@ def fit(
         except FitDivergedError as e:  # a diagonal R may still rescue it
             first = e
         result = fall_back([first], lambda idx: [run(True)], [names], progress)[0]
-    result = dataclasses.replace(result, warnings=(*result.warnings, *instability_warnings(
-        start_model, result.model, exps, names)))
+    result = dataclasses.replace(result, warnings=(*result.warnings, *method_hints(
+        start_model, result, exps, names)))
     issue(result.warnings)
     if progress:
         state = "converged" if bool(result.converged) else "NOT converged"
