@@ -10,8 +10,14 @@ import warnings
 
 import numpy as np
 
+import _tc02
+import _tc04
 import _tc08
 from _textbook import fwid_model
+
+#: The book's filter-error estimates of TC04 (chapter 7 ``mDefCase04``, ``parFEM``).
+TC04_FEM_BOOK = dict(CD0=0.122688, CDa=0.320055, CLa=4.32785, Cma=-0.967854, Cmq=-34.7098,
+                     Cmde=-1.52913)
 
 
 def _experiments(case):
@@ -22,7 +28,7 @@ def _experiments(case):
 
 
 def _table(model, result, names):
-    """All `names`, the fixed ones with std 0."""
+    """All `names`, the fixed ones (values from `model`) with std 0."""
     out = {}
     for k in names:
         if k in result.names:
@@ -77,4 +83,72 @@ def tc08() -> dict:
     return out
 
 
-RUNNERS = {"tc08": tc08}
+def _fem_entry(case, res, wall, names):
+    out = _table(None, res, (*names, *(f"F_{s}" for s in case.states)))
+    eig = np.linalg.eigvals(np.asarray(res.model.state_matrices(
+        res.model.params, {}, x0=case.records()[0]["x0"],
+        u0=case.records()[0]["u"][0])[0]))
+    out["_fwid"] = {"method": "filter-error", "converged": bool(res.converged),
+                    "relaxation_passes": res.outer, "steps": int(res.steps),
+                    "noise": res.noise, "wall_s": wall, "white": res.white,
+                    "whiteness": res.whiteness, "F": np.asarray(res.F).tolist(),
+                    "eigenvalues": [[float(e.real), float(e.imag)] for e in eig],
+                    "stable": bool(np.all(eig.real < 0)), "warnings": list(res.warnings)}
+    state = "converged" if bool(res.converged) else "NOT converged"
+    print(f"\n{case.title}: filter error {state} in {res.outer} passes "
+          f"({int(res.steps)} steps), {wall:.1f} s "
+          f"(compilation included); innovations white: {res.white}; "
+          f"stable: {out['_fwid']['stable']}")
+    return out
+
+
+def tc04_fem() -> dict:
+    """FVSysID TC04 (HFB-320) by the filter-error method from the book's start values (F too),
+    against the book's filter-error estimates."""
+    case = _tc04.CASE
+    res, wall = _timed_fit(fwid_model(case), _experiments(case), method="filter-error",
+                           process_noise=_tc04.F0)
+    out = _fem_entry(case, res, wall, case.names)
+    diff = {k: 100 * (out[k]["value"] / v - 1) for k, v in TC04_FEM_BOOK.items()}
+    out["_published"] = {"values": TC04_FEM_BOOK, "diff_pct": diff,
+                         "source": "Jategaonkar (2015) companion software, "
+                                   "chapter07/mDefCase04.m, parFEM"}
+    for k, v in TC04_FEM_BOOK.items():
+        print(f"  {k:<5}{out[k]['value']:>11.6g}  book {v:>10.6g}  {diff[k]:+.2f} %")
+    return out
+
+
+def tc02_fem() -> dict:
+    """FVSysID TC02 (lateral-directional in turbulence) by the filter-error method from the
+    book's start values."""
+    case = _tc02.CASE
+    res, wall = _timed_fit(fwid_model(case), _experiments(case), method="filter-error",
+                           process_noise=_tc02.F0)
+    return _fem_entry(case, res, wall, case.names)
+
+
+def speed_fem_vs_oem(repeats: int = 5) -> dict:
+    """Filter error against output error on TC04, both from the book's start values: the
+    first call (compilation included) and the median of `repeats` warm calls. Output error
+    with its default `noise="auto"` (a full-R fit, then a diagonal-R one: two fits) and
+    with `noise="diagonal"` (one fit, the R the filter error uses); the ratios against the
+    default."""
+    case = _tc04.CASE
+    model, exps = fwid_model(case), _experiments(case)
+    out = {}
+    for key, kw in (("oem", {}), ("oem_diagonal", dict(noise="diagonal")),
+                    ("fem", dict(method="filter-error", process_noise=_tc04.F0))):
+        _, first = _timed_fit(model, exps, **kw)
+        warm = [_timed_fit(model, exps, **kw)[1] for _ in range(repeats)]
+        out[key] = {"first_s": first, "warm_median_s": float(np.median(warm))}
+    out["ratio_warm"] = out["fem"]["warm_median_s"] / out["oem"]["warm_median_s"]
+    out["ratio_first"] = out["fem"]["first_s"] / out["oem"]["first_s"]
+    print(f"\nspeed, TC04: output error {out['oem']['warm_median_s']:.2f} s warm "
+          f"({out['oem']['first_s']:.1f} s first), filter error "
+          f"{out['fem']['warm_median_s']:.2f} s warm ({out['fem']['first_s']:.1f} s first): "
+          f"{out['ratio_warm']:.2f}x warm, {out['ratio_first']:.2f}x first")
+    return out
+
+
+RUNNERS = {"tc08": tc08, "tc04_fem": tc04_fem, "tc02_fem": tc02_fem,
+           "speed_fem_vs_oem": speed_fem_vs_oem}

@@ -12,6 +12,10 @@ Writes ``{case: {param: {"value": .., "std": ..}}}`` for
   (`_twin_otter.py`);
 * ``tc08``: FVSysID test case 8, the unstable aircraft, by ``method="multiple-shooting"``
   (`_tc08.py`, `_method_cases.py`; with the errors from the true values);
+* ``tc04_fem``: test case 4 by ``method="filter-error"``, against the book's filter-error
+  estimates; ``tc02_fem``: test case 2, lateral-directional in turbulence (`_tc02.py`), by
+  filter error (converged, stable, innovations white);
+* ``speed_fem_vs_oem``: the time of the filter-error fit of TC04 against the output-error one;
 
 ``--reference`` also fits each case with the independent numpy/scipy estimator
 (`_baseline.py`, diagonal R as FVSysID and SIDPAC) and adds, per case, the key
