@@ -16,6 +16,8 @@ Writes ``{case: {param: {"value": .., "std": ..}}}`` for
   estimates; ``tc02_fem``: test case 2, lateral-directional in turbulence (`_tc02.py`), by
   filter error (converged, stable, innovations white);
 * ``speed_fem_vs_oem``: the time of the filter-error fit of TC04 against the output-error one;
+* ``gust_fem_vs_oem``: simulated DelFly flights in gusts, filter error against output error
+  (relative errors of the derivatives from the simulator's truth);
 
 ``--reference`` also fits each case with the independent numpy/scipy estimator
 (`_baseline.py`, diagonal R as FVSysID and SIDPAC) and adds, per case, the key

@@ -38,6 +38,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, Float
 
+from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
 from ._gauss_newton import NoiseModel, RelaxedGaussNewton, jacobian_once, noise_covariance
@@ -174,7 +175,8 @@ def compensate_f(fdiag, C, R_old, R_new):
     C2 = np.asarray(C) ** 2
     den = C2.T @ ri
     factor = np.where(den > 0, (C2.T @ (ri * ratio)) / np.where(den > 0, den, 1.0), 1.0)
-    return np.asarray(fdiag) * factor
+    # (never more than doubled in one pass; Gauss-Newton does the rest)
+    return np.asarray(fdiag) * np.clip(np.nan_to_num(factor, nan=1.0), 0.0, 2.0)
 
 
 def _default_f(model: GreyBoxModel, exps: Sequence[Experiment]) -> np.ndarray:
@@ -240,21 +242,50 @@ def fit_filter_error(
     if progress:
         print(f"fwid: fitting {model.name} by filter error to {', '.join(names)} ...",
               flush=True)
-    steps = 0
+    steps, last, change = 0, None, float("nan")
+    rise_max = 0.01 * float(jnp.sum(batch.mask)) * batch.z.shape[-1]
+    halvings, alt = 0, None  # F-compensation halvings; (theta, Rk) before the compensation
     for outer in range(1, max_outer + 1):
         out = _inner(start_model, theta, batch, Rk, p=p, diagonal=diagonal,
                      max_steps=steps_per_pass, rtol=rtol, cost_rtol=cost_rtol)
         steps += int(out["steps"])
+        cost = float(out["cost"])
+        if last is None and not np.isfinite(cost):
+            raise FitDivergedError(
+                f"{', '.join(names)}: the {model.name} filter-error fit diverged (the filter's "
+                "innovations are not finite from the start values); give start values closer "
+                "to the answer or a smaller process_noise")
+        if last is not None and not cost <= float(last["cost"]) + rise_max:
+            # Local divergence after the F compensation (the gain grew too much for the new
+            # R): halve the compensation twice, then go back and stop (the book's rule).
+            # (The relaxation need not lower the cost at every pass: the R of the gain
+            # changes what is minimised; a rise of the log-likelihood beyond `rise_max`,
+            # the R elements 2 % larger on average, is divergence.)
+            halvings += 1
+            if halvings > 2 or alt is None:
+                out = last
+                break
+            theta = theta.at[p:].set(0.5 * (theta[p:] + alt[0][p:]))
+            continue
+        last, halvings = out, 0
         theta = out["theta"]
         R_new = out["R"]
         change = float(jnp.max(jnp.abs(jnp.diag(R_new) / jnp.diag(Rk) - 1)))
         if _DEBUG:
-            print(f"  outer {outer}: {int(out['steps'])} steps, cost {float(out['cost']):.8g}, R change {change:.3g}, F {np.asarray(theta[p:])}")
+            print(f"  outer {outer}: {int(out['steps'])} steps, cost {cost:.8g}, "
+                  f"R change {change:.3g}, F {np.asarray(theta[p:])}")
         if not np.isfinite(change) or change <= outer_rtol:
             break
+        alt = (theta, Rk)
+        # A damped update: each diagonal element of R moves by a factor of 10 at most per
+        # pass (from the output-error R of a poor start it can fall a thousandfold, and the
+        # gain would outgrow the compensation of F)
+        ratio = jnp.clip(jnp.diag(R_new) / jnp.diag(Rk), 0.1, 10.0)
+        R_new = jnp.diag(jnp.diag(Rk) * ratio) if diagonal else R_new
         f = compensate_f(theta[p:], out["C"], Rk, R_new)
         theta = theta.at[p:].set(jnp.asarray(f))
         Rk = R_new
+    theta = last["theta"]
     converged = np.isfinite(change) and change <= outer_rtol
     cov = covariance(out["M"])
     std = jnp.sqrt(jnp.abs(jnp.diag(cov)))
