@@ -17,8 +17,8 @@ negative log-likelihood `1/2 sum nu^T R^-1 nu + N/2 ln det R` (Eq. 5.36) with th
 covariance `R` estimated explicitly (Eq. 5.40, diagonal as the book by default).
 
 The minimisation is the book's relaxation (Sec. 5.6): for the `R` that the gain uses, the
-parameters and `F` by Gauss-Newton (Jategaonkar's step with the weighting `R` relaxed at
-every step and the step halved, as [`RelaxedGaussNewton`][] in output error); then that `R` is replaced by the new estimate and `F`
+parameters and `F` by Gauss-Newton ([`RelaxedGaussNewton`][], the weighting `R` relaxed at
+every step as in output error); then that `R` is replaced by the new estimate and `F`
 compensated for the change (the heuristic of Eq. 5.41); repeated until `R` settles. Unlike
 the book's software (finite differences, perturbed gain matrices), the Jacobians of the
 innovations come from forward-mode autodiff through the filter, the matrix exponential and
@@ -35,12 +35,13 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optimistix as optx
 from jaxtyping import Array, Float
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
-from ._gauss_newton import NoiseModel, noise_covariance
+from ._gauss_newton import NoiseModel, RelaxedGaussNewton, jacobian_once, noise_covariance
 from ._noise import check_noise
 from ._output_error import FitResult, _prepare
 from ._riccati import steady_state_gain
@@ -131,64 +132,33 @@ def _innovations(model, theta, Rk, batch, p, gain=True):
 
 
 @eqx.filter_jit
-def _linearise(model, theta, batch, Rk, noise: NoiseModel, p: int):
-    """The innovations, their Jacobian (forward-mode autodiff through the filter and the
-    Riccati solution), R (Eq. 5.40), the cost (Eq. 5.36 at that R), the Gauss-Newton
-    terms and the scaled Gauss-Newton step, and the filter's `K`, `P`, `C`."""
-    def run(th):
-        nu, K, P, C = _innovations(model, th, Rk, batch, p)
-        return nu, (K[0], P[0], C[0])
+def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol):
+    """Gauss-Newton on the parameters and F for the gain's innovation covariance `Rk`."""
+    noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
 
-    # one trace of the filter for the innovations, their Jacobian and the filter's matrices
-    eye = jnp.eye(theta.shape[0], dtype=theta.dtype)
-    (v, (K, P, C)), (J, _) = jax.vmap(lambda t: jax.jvp(run, (theta,), (t,)),
-                                      out_axes=(None, -1))(eye)
-    H, g = noise.gradient_terms(v, J)
-    h = jnp.sqrt(jnp.diag(H))
-    d = jnp.where(h > 0, 1.0 / jnp.where(h > 0, h, 1.0), 0.0)
-    Hs = H * d[:, None] * d[None, :] + jnp.diag(jnp.where(h > 0, 0.0, 1.0))
-    newton = d * jax.scipy.linalg.cho_solve(jax.scipy.linalg.cho_factor(Hs, lower=True),
-                                            d * g)
-    return dict(v=v, R=noise.R(v), cost=noise.cost(v), M=H, step=-newton, h=h,
-                decrement=g @ newton, K=K, P=P, C=C)
+    def residuals_and_jacobian(theta):
+        def nus(th):
+            return _innovations(model, th, Rk, batch, p)[0]
+        # one trace of the filter for the innovations and their Jacobian
+        eye = jnp.eye(theta.shape[0], dtype=theta.dtype)
+        return jax.vmap(lambda t: jax.jvp(nus, (theta,), (t,)), out_axes=(None, -1))(eye)
 
-
-@eqx.filter_jit
-def _cost(model, theta, batch, Rk, noise: NoiseModel, p: int):
-    return noise.cost(_innovations(model, theta, Rk, batch, p)[0])
-
-
-def _gauss_newton(model, theta, batch, Rk, noise, p, steps, rtol):
-    """`steps` Gauss-Newton steps on the parameters and F for the gain's `Rk`, R relaxed at
-    every step (Eq. 5.40) and the step halved until the likelihood decreases, as
-    [`RelaxedGaussNewton`][] (here a Python loop around two compiled functions: they
-    compile in half the time of an `optimistix` solve around the same Jacobian)."""
-    lin = _linearise(model, theta, batch, Rk, noise, p)
-    taken, converged = 0, False
-    for _ in range(steps):
-        c0 = float(lin["cost"])
-        if not np.isfinite(c0):
-            break
-        small = bool(jnp.all(jnp.abs(lin["step"]) * lin["h"]
-                             <= 1e-9 + rtol * jnp.abs(theta) * lin["h"]))
-        if small or 0.5 * float(lin["decrement"]) <= 1e-10 * (1.0 + abs(c0)):
-            converged = True
-            break
-        alpha, ok = 1.0, False
-        for _ in range(12):
-            taken += 1
-            c = float(_cost(model, theta + alpha * lin["step"], batch, Rk, noise, p))
-            if np.isfinite(c) and c <= c0 - 1e-4 * alpha * 0.5 * float(lin["decrement"]):
-                ok = True
-                break
-            alpha *= 0.5
-        if not ok:
-            converged = True  # no step lowers the cost: at the optimum to round-off
-            break
-        theta = theta + alpha * lin["step"]
-        lin = _linearise(model, theta, batch, Rk, noise, p)
-    lin.update(theta=theta, steps=taken, converged=converged)
-    return lin
+    residuals = jacobian_once(residuals_and_jacobian)
+    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=1e-9, cost_rtol=cost_rtol,
+                                history_length=max_steps)
+    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
+                             throw=False)
+    theta = sol.value
+    v = sol.state.f_info.residual
+    J = sol.state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])
+    R = noise.R(v)
+    _, K, P, C = _innovations(model, theta, Rk, batch, p)
+    Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
+    Sw = jnp.einsum("bkip,ji->bkjp", J, Linv).reshape(-1, theta.shape[0])
+    return dict(theta=theta, R=R, v=v, M=Sw.T @ Sw, cost=sol.state.search_state.cost,
+                steps=sol.stats["num_steps"], accepted=sol.state.search_state.accepted,
+                converged=sol.result == optx.RESULTS.successful, K=K[0], P=P[0], C=C[0],
+                hist=sol.state.search_state.history)
 
 
 @eqx.filter_jit
@@ -274,12 +244,12 @@ def fit_filter_error(
     if progress:
         print(f"fwid: fitting {model.name} by filter error to {', '.join(names)} ...",
               flush=True)
-    noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
-    steps, last, change, history = 0, None, float("nan"), []
+    steps, last, change = 0, None, float("nan")
     rise_max = 0.01 * float(jnp.sum(batch.mask)) * batch.z.shape[-1]
     halvings, alt = 0, None  # F-compensation halvings; (theta, Rk) before the compensation
     for outer in range(1, max_outer + 1):
-        out = _gauss_newton(start_model, theta, batch, Rk, noise, p, steps_per_pass, rtol)
+        out = _inner(start_model, theta, batch, Rk, p=p, diagonal=diagonal,
+                     max_steps=steps_per_pass, rtol=rtol, cost_rtol=cost_rtol)
         steps += int(out["steps"])
         cost = float(out["cost"])
         if last is None and not np.isfinite(cost):
@@ -300,7 +270,6 @@ def fit_filter_error(
             theta = theta.at[p:].set(0.5 * (theta[p:] + alt[0][p:]))
             continue
         last, halvings = out, 0
-        history.append(cost)
         theta = out["theta"]
         R_new = out["R"]
         change = float(jnp.max(jnp.abs(jnp.diag(R_new) / jnp.diag(Rk) - 1)))
@@ -328,9 +297,8 @@ def fit_filter_error(
     fitted = start_model.with_params(dict(zip(model.free, theta[:p])))
     res = FilterErrorResult(
         model=fitted, names=all_names, theta=theta, std=std, std_cr=std, cov=cov,
-        corr=correlation(cov), R=out["R"], cost=out["cost"],
-        cost_history=jnp.asarray(history), passes=jnp.asarray(len(history)),
-        steps=jnp.asarray(steps), converged=jnp.asarray(converged),
+        corr=correlation(cov), R=out["R"], cost=out["cost"], cost_history=out["hist"],
+        passes=out["accepted"], steps=jnp.asarray(steps), converged=jnp.asarray(converged),
         start=jnp.concatenate([theta0, jnp.asarray(f0)]),
         noise="diagonal" if diagonal else "full",
         lag1=jnp.max(jax.vmap(lag1_autocorrelation)(v, batch.mask), axis=0),
