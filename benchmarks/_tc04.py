@@ -32,6 +32,7 @@ THETA0 = np.array([5.67516e-03, 7.72612e-03, 6.74256e-01, -3.18267e-01, 2.60317e
 PUBLISHED = dict(zip(NAMES, (1.22688e-01, -6.44969e-02, 3.20055e-01, -9.29113e-02,
                              1.48726e-01, 4.32785e+00, 1.11905e-01, 3.95154e-03, -9.67854e-01,
                              -3.47098e+01, -1.52913e+00)))
+F0 = np.array([0.02, 0.002, 0.02, 0.02])  # start values of F, the book's (chapter 5 mDefCase04)
 X0 = np.array([1.06023e+02, 1.11685e-01, 1.04887e-01, -3.32659e-03])
 FILE = "jategaonkar_fvsysid2/hfb320_1_10.asc"
 # geometry and mass data of the book's model

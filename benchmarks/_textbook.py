@@ -54,6 +54,7 @@ class Case:
     files: tuple[str, ...]
     published: dict[str, float] = field(default_factory=dict)
     source: str = ""
+    free: tuple[str, ...] | None = None  # the parameters estimated (default: all)
 
     def available(self) -> bool:
         return all((data_root() / f).exists() for f in self.files)
@@ -68,7 +69,7 @@ def fwid_model(case: Case):
     return fwid.GreyBoxModel(
         lambda x, u, p, c: case.xdot(x, u, p, c, jnp), states=case.states, inputs=case.inputs,
         h=lambda x, u, p, c: case.obs(x, u, p, c, jnp), outputs=case.outputs,
-        params=dict(zip(case.names, map(float, case.theta0))), name=case.key)
+        params=dict(zip(case.names, map(float, case.theta0))), free=case.free, name=case.key)
 
 
 def fit_fwid(case: Case, records=None, **kw):

@@ -8,3 +8,9 @@ from ._uncertainty import (
 )
 from ._local import refit_local_affine as refit_local_affine
 from ._warnings import fit_warnings as fit_warnings
+from ._shooting import fit_shooting as fit_shooting
+from ._filter_error import (
+    FilterErrorResult as FilterErrorResult,
+    fit_filter_error as fit_filter_error,
+)
+from ._riccati import steady_state_gain as steady_state_gain

@@ -270,6 +270,8 @@ def fit(
     cost_rtol: float = 1e-10,
     local_per_flight: bool = True,
     progress: bool = False,
+    method: str = "output-error",
+    **options,
 ) -> FitResult:
     """Estimate the free parameters of `model` by output-error maximum likelihood.
 
@@ -298,6 +300,10 @@ def fit(
     - `local_per_flight`: with several experiments, estimate the model's `local` parameters
       (bias terms) separately for each one (named `name@i`); otherwise they are shared.
     - `progress`: print a line when the fit starts and ends.
+    - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
+      (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
+      `"filter-error"` for data with process noise (`fwid.estimate._filter_error`).
+    - `options`: the chosen method's own options.
 
     **Returns:** a [`fwid.FitResult`][].
 
@@ -311,6 +317,11 @@ def fit(
     exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
     exps = [with_measured_x0(model, e) for e in exps]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    if method != "output-error" or options:
+        from ._methods import fit_method
+        return fit_method(method, model, exps, options, names=names, start=start, noise=noise,
+                          max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
+                          progress=progress, **options)
     t0 = time.perf_counter()
     n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
     start_model, theta0 = _prepare(model, exps, names, start, n_local)

@@ -56,4 +56,5 @@ def instability_warning(model: GreyBoxModel, exps: Sequence, flights: Sequence[s
             "diverges from the data for all but the exact parameters and x0 and can settle "
             "on a wrong stable model; trust the estimates only if the residuals are small and "
             "white; otherwise fit shorter records, or use a method that keeps the simulation "
-            "near the data (process noise: filter error; multiple shooting)")
+            "near the data: fwid.fit(..., method='multiple-shooting'), or "
+            "method='filter-error' with process noise")

@@ -127,7 +127,8 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
                    f"between outputs ({a} and {b}: "
                    f"{c:+.2f}): process noise or a missing effect, not measurement noise; "
                    "check the model for missing terms; with process noise (turbulence) "
-                   "output-error estimates are biased (a filter-error fit models it); the "
+                   "output-error estimates are biased (fit with method='filter-error', a "
+                   "Kalman filter in the likelihood, whose innovations should be white); the "
                    "standard deviations `std` allow for the colour, `std_cr` does not")
     pairs = correlated_pairs(result.corr, result.names)
     if not pairs and information is not None and not np.all(np.isfinite(np.asarray(result.corr))):
