@@ -6,12 +6,10 @@ separated, uniformly sampled; `vehicle.json` beside the CSV files.
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
 import re
-import warnings
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
@@ -19,7 +17,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._errors import FlightDataError
-from ._checks import KNOWN_COLUMNS, check_columns, check_flight
+from ._checks import check_columns, check_flight
+from ._csv import read_csv
 from ._flight import Flight, Vehicle
 from ._trim import estimate_trim, first_input_index, input_column
 
@@ -104,151 +103,6 @@ def load_vehicle(path: PathLike) -> Vehicle:
 
 
 # --------------------------------------------------------------------------- CSV
-
-
-def _split_header(line: str) -> list[str]:
-    line = line.strip()
-    if line.startswith("#"):
-        line = line[1:]
-    return [f.strip().strip('"').strip("'").strip() for f in line.split(",")]
-
-
-def _is_float(s: str) -> bool:
-    try:
-        float(s)
-    except ValueError:
-        return False
-    return True
-
-
-def _read_csv(path: Path, name: str, require: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """All numeric columns of the CSV by name (`t` included), in file order.
-
-    Columns named in CONTRACTS section 1 or in `require` must be fully numeric (an empty
-    cell reads as NaN, caught later); an extra column with non-numeric cells is dropped.
-    """
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise FlightDataError(f"{name}: cannot read the file ({e.strerror or e})") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise FlightDataError(
-            f"{name}: not a text file (cannot decode as UTF-8); save the flight as a CSV "
-            "text file"
-        ) from None
-    lines = text.splitlines()
-    # The header: the first non-blank line, skipping leading '#' comments without commas.
-    h = next(
-        (
-            i
-            for i, ln in enumerate(lines)
-            if ln.strip() and not (ln.lstrip().startswith("#") and "," not in ln)
-        ),
-        None,
-    )
-    if h is None:
-        raise FlightDataError(f"{name}: file is empty; expected a header row and data rows")
-    header = _split_header(lines[h])
-    if len(header) == 1:
-        for sep, word in ((";", "semicolons"), ("\t", "tabs")):
-            if sep in lines[h]:
-                raise FlightDataError(
-                    f"{name}: columns are separated by {word}, not commas; save the file as "
-                    "comma-separated values"
-                )
-    if all(_is_float(f) for f in header if f):
-        raise FlightDataError(
-            f"{name}: line {h + 1} has no column names; add a header row such as "
-            "'t,q,u,w,theta,de'"
-        )
-    seen: dict[str, int] = {}
-    for j, col in enumerate(header):
-        if not col:
-            continue  # unnamed (e.g. a trailing comma): ignored
-        if col in seen:
-            raise FlightDataError(
-                f"{name}: column '{col}' appears twice in the header (columns {seen[col] + 1} "
-                f"and {j + 1}); rename or remove one"
-            )
-        seen[col] = j
-    names = list(seen)
-    usecols = [seen[c] for c in names]
-    strict = set(KNOWN_COLUMNS) | set(require)
-
-    data_lines = lines[h + 1 :]
-    commas = len(header) - 1
-    ragged = any(
-        ln.count(",") != commas and ln.strip() and not ln.lstrip().startswith("#")
-        for ln in data_lines
-    )
-    if ragged:  # rows with more or fewer fields than the header: find and name them
-        return _read_csv_slow(name, header, names, seen, data_lines, h + 2, strict)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            arr = np.loadtxt(
-                io.StringIO("\n".join(data_lines)),
-                delimiter=",",
-                comments="#",
-                usecols=usecols,
-                ndmin=2,
-                dtype=float,
-            )
-    except ValueError:
-        return _read_csv_slow(name, header, names, seen, data_lines, h + 2, strict)
-    if arr.shape[0] == 0:
-        raise FlightDataError(f"{name}: no data rows under the header; the file holds no samples")
-    return {c: arr[:, k] for k, c in enumerate(names)}
-
-
-def _read_csv_slow(name, header, names, seen, data_lines, first_line_no, strict):
-    """Cell-by-cell parse of a file numpy could not read: finds the bad cell."""
-    rows: list[list[str]] = []
-    line_nos: list[int] = []
-    nf = len(header)
-    for k, ln in enumerate(data_lines):
-        s = ln.strip()
-        if not s or s.startswith("#"):
-            continue
-        fields = ln.split(",")
-        if len(fields) != nf:
-            if len(fields) > nf and not any(f.strip() for f in fields[nf:]):
-                fields = fields[:nf]
-            else:
-                raise FlightDataError(
-                    f"{name}: line {first_line_no + k} has {len(fields)} fields but the header "
-                    f"has {nf}; fix the row or remove it"
-                )
-        rows.append(fields)
-        line_nos.append(first_line_no + k)
-    if not rows:
-        raise FlightDataError(f"{name}: no data rows under the header; the file holds no samples")
-    out = {}
-    for col in names:
-        j = seen[col]
-        cells = [r[j].strip().strip('"') for r in rows]
-        values = np.empty(len(cells))
-        bad = None
-        for i, c in enumerate(cells):
-            if not c:
-                values[i] = np.nan
-                continue
-            try:
-                values[i] = float(c)
-            except ValueError:
-                bad = i
-                break
-        if bad is None:
-            out[col] = values
-        elif col in strict:
-            raise FlightDataError(
-                f"{name}: non-numeric value {cells[bad]!r} in column '{col}' at row {bad} "
-                f"(line {line_nos[bad]}); write a number there or remove the row"
-            )
-        # else: a non-numeric extra column, dropped (fwid ignores extra columns)
-    return out
 
 
 # --------------------------------------------------------------------------- sidecar
@@ -343,12 +197,12 @@ def load_flight(
         raise FlightDataError(f"{path}: no such file")
     name = name or path.name
     where = str(path)  # messages name the path as given
-    table = _read_csv(path, where, require)
+    table, lines = read_csv(path, where, require)
     t = table.pop("t", None)
     columns = table
     if t is None:
         check_columns(where, list(columns), require)  # raises: names the missing 't'
-    check_flight(where, t, columns, require)
+    check_flight(where, t, columns, require, lines)
     n = t.shape[0]
     t = t[0] + np.arange(n) * ((t[-1] - t[0]) / (n - 1))
 
