@@ -61,7 +61,7 @@ def _cycle_averaged(args, flights, validate):
     """`--model lon|lat`: Section IV; with `--joint --validate`, joint vs individual."""
     import fwid
     from fwid.report import (identification_summary, joint_report, joint_summary,
-                             plot_fits_overview)
+                             plot_fits_overview, spread_table)
 
     ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
                           cutoff=args.cutoff, progress=not args.quiet)
@@ -73,6 +73,10 @@ def _cycle_averaged(args, flights, validate):
                                         cutoff=args.cutoff, progress=not args.quiet)
         report["joint_vs_individual"] = joint_report(comparison)
         print("\n" + joint_summary(comparison))
+        spread = report["joint_vs_individual"]["modes"]["individual_spread"]
+        print("\n" + spread_table(spread, f"mode spread over the {spread['flights']} training "
+                                           "flights, each fitted alone (the joint model's "
+                                           "modes are above):"))
 
     def figures(out):
         fits = [*ident.estimation, *ident.validation]
