@@ -16,9 +16,13 @@ columns a model requires; other (extra) columns are kept as they are and never u
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
-from jaxtyping import ArrayLike, Float
+from jaxtyping import Float
+
+if TYPE_CHECKING:  # jaxtyping's ArrayLike imports JAX, which reading a file needs not
+    from jaxtyping import ArrayLike
 
 from .._errors import FlightDataError
 

@@ -110,10 +110,11 @@ def read_csv(
         return _read_csv_slow(name, header, names, seen, data_lines, h + 2, strict)
     if arr.shape[0] == 0:
         raise FlightDataError(f"{name}: no data rows under the header; the file holds no samples")
-    lines_of = np.array([h + 2 + k for k, ln in enumerate(data_lines)
-                         if ln.split("#", 1)[0].strip()])
-    if lines_of.size != arr.shape[0]:  # cannot happen unless numpy skips differently
-        lines_of = np.arange(arr.shape[0]) + h + 2
+    lines_of = np.arange(arr.shape[0]) + h + 2  # no blank or comment line among the rows
+    if len(data_lines) != arr.shape[0]:
+        kept = [h + 2 + k for k, ln in enumerate(data_lines) if ln.split("#", 1)[0].strip()]
+        if len(kept) == arr.shape[0]:
+            lines_of = np.array(kept)
     return {c: arr[:, k] for k, c in enumerate(names)}, lines_of
 
 
