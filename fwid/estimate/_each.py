@@ -17,6 +17,7 @@ from ..simulate._experiment import Experiment, stack_experiments
 from ._devices import device_count, flight_mesh, padded_count
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result
+from ._start_each import least_squares_start_each
 from ._warnings import issue
 
 
@@ -67,7 +68,10 @@ def fit_each(
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
-        starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
+        for e, n in zip(exps, names):  # the checks first, flight by flight
+            _prepare(model, [e], [n], "model", 0)
+        starts = [_prepare(model, [e], [n], s, 0)  # all starts in one batched call
+                  for e, n, s in zip(exps, names, least_squares_start_each(model, exps))]
     else:  # one start for all (the checks still run on every flight)
         starts = [_prepare(model, exps, names, start, 0)] * len(exps)
     kw = dict(max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol)
