@@ -13,6 +13,7 @@ from jax.sharding import PartitionSpec
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
+from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments
 from ._devices import device_count, flight_mesh, padded_count
 from ._noise import check_noise, fall_back
@@ -56,8 +57,9 @@ def fit_each(
 ) -> list[FitResult]:
     """Fit `model` to each experiment on its own, all in one vmapped call.
 
-    The flights are padded to a common length and masked (a padded sample never enters a
-    cost), so one compiled estimator serves every flight and the whole batch runs as a single
+    The flights are padded to a common length, one of a few (`fwid.simulate.bucket_length`),
+    and masked (a padded sample never enters a cost), so one compiled estimator serves every
+    flight, and flights of a new length mostly reuse it, and the whole batch runs as a single
     XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
     on each flight alone. Arguments as for [`fwid.fit`][].
 
@@ -113,7 +115,8 @@ def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
     flight, whose results are dropped."""
     B = padded_count(len(exps))
     fill = [exps[-1]] * (B - len(exps))
-    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill))
+    n = bucket_length(max(e.n for e in exps))  # a few lengths: a new one rarely compiles
+    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill, n))
     th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
     out = jax.device_get(_fit_each_batched(model, th, stacked, flight_mesh(B),
                                            diagonal=diagonal, n_local_batch=0, **kw))

@@ -3,8 +3,8 @@
 [`least_squares_start`][] on one flight runs a few Gauss-Newton steps, each a compiled
 residual and Jacobian and a least-squares solve on the host, flight after flight. For
 [`fwid.fit_each`][], [`least_squares_start_each`][] does the same for all flights at once:
-the flights are padded to a common length (`fwid.stack_experiments`; a padded sample
-carries no weight) and the whole start, the force regression and then the state
+the flights are padded to a common length, one of a few (`fwid.simulate.bucket_length`;
+a padded sample carries no weight) and the whole start, the force regression and then the state
 regression, with the solves, is one XLA computation `vmap`ped over the flights: one
 compilation per model and batch shape, not a dispatch per step and flight. The estimates
 equal those of `least_squares_start` on each flight alone (to rounding).
@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
+from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments
 from ._start import _derivative
 from ._start_outputs import nominal_start
@@ -105,8 +106,9 @@ def least_squares_start_each(model: GreyBoxModel,
                    and e.forces is not None]
     groups: dict[tuple, list[int]] = {}
     if with_forces:  # which free parameters each flight's force model depends on
-        dep = np.asarray(_force_dependence(model, free,
-                                           stack_experiments([exps[i] for i in with_forces])))
+        batch = stack_experiments([exps[i] for i in with_forces],
+                                  bucket_length(max(exps[i].n for i in with_forces)))
+        dep = np.asarray(_force_dependence(model, free, batch))
         for i, row in zip(with_forces, dep):
             groups.setdefault(tuple(k for k, d in zip(free, row) if d), []).append(i)
     rest_of_none = [i for i in range(len(exps)) if i not in set(with_forces)]
@@ -119,7 +121,7 @@ def least_squares_start_each(model: GreyBoxModel,
             nominal_start(model, list(rest))
             rest = ()
         group = [exps[i] for i in idx]
-        n = max(e.n for e in group)
+        n = bucket_length(max(e.n for e in group))
         batch = stack_experiments(group, n)
         nf = len(model.force_names) if force_free else 0
         fscales = np.stack([np.asarray(e.forces).std(axis=0) + 1e-300 if nf
