@@ -47,3 +47,19 @@ def test_one_compilation_for_all_flights(lon_flight, caplog):
     with caplog.at_level(logging.WARNING), jax.log_compiles(True):
         least_squares_start_each(longitudinal(), [_noisy(lon_flight, s, 901) for s in (7, 8, 9)])
     assert not [r for r in caplog.records if "Compiling" in r.getMessage()]
+
+
+def test_fit_on_a_padded_flight_is_unchanged(lon_flight, monkeypatch):
+    """`fwid.fit` pads the flight to its bucket length (masked): the estimates, their
+    standard deviations and the steps equal those on the flight as it is (1e-9)."""
+    import importlib
+
+    oe = importlib.import_module("fwid.estimate._output_error")
+    exp = _noisy(lon_flight, 11, 901, forces=False)  # padded to 960, as in the other tests
+    padded = fwid.fit(longitudinal(), exp, noise="full")
+    monkeypatch.setattr(oe, "bucket_length", lambda n: n)
+    plain = fwid.fit(longitudinal(), exp, noise="full")
+    np.testing.assert_allclose(np.asarray(padded.theta), np.asarray(plain.theta), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(padded.std), np.asarray(plain.std), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(padded.R), np.asarray(plain.R), rtol=1e-9)
+    assert int(padded.steps) == int(plain.steps)
