@@ -7,12 +7,14 @@ import sys
 import time
 from pathlib import Path
 
-from ._inputs import check_paths
+from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets
 
 
 def diagnose(args) -> int:
+    t0 = time.perf_counter()
     check_paths(args.train, args.test)
-    import fwid
+    train, test = read_sets(args.train, args.test, require=DIAGNOSE_COLUMNS[args.axis])
+    import fwid  # JAX from here on: every file has been read and checked
     from fwid.report import (
         diagnosis_summary,
         identification_report,
@@ -23,9 +25,7 @@ def diagnose(args) -> int:
         write_text,
     )
 
-    t0 = time.perf_counter()
-    train = fwid.load_flights(*args.train)
-    test = fwid.load_flights(*args.test)
+    train, test = fwid.data.build_flights(train), fwid.data.build_flights(test)
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
     diag = fwid.diagnose(train, test, axis=args.axis, simulation=not args.no_simulation,
                          progress=say)

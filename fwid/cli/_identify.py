@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from ._inputs import check_paths
+from ._inputs import IDENTIFY_COLUMNS, VEHICLE_MODELS, check_paths, read_sets
 
 
 def _stem(name: str) -> str:
@@ -18,12 +18,15 @@ def _stem(name: str) -> str:
 
 
 def identify(args) -> int:
-    check_paths(args.data, args.validate)
-    import fwid
-
     t0 = time.perf_counter()
-    flights = fwid.load_flights(*args.data)
-    validate = fwid.load_flights(*args.validate) if args.validate else []
+    check_paths(args.data, args.validate)
+    vehicle = args.model if args.model in VEHICLE_MODELS else None
+    train, held_out = read_sets(args.data, args.validate,
+                                require=IDENTIFY_COLUMNS[args.model], vehicle_for=vehicle)
+    import fwid  # JAX from here on: every file has been read and checked
+
+    flights = fwid.data.build_flights(train)
+    validate = fwid.data.build_flights(held_out)
     if args.model in ("flap", "combined"):
         report, figures = _flapping(args, flights, validate)
     else:
@@ -61,7 +64,7 @@ def _cycle_averaged(args, flights, validate):
     """`--model lon|lat`: Section IV; with `--joint --validate`, joint vs individual."""
     import fwid
     from fwid.report import (identification_summary, joint_report, joint_summary,
-                             plot_fits_overview)
+                             plot_fits_overview, spread_table)
 
     ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
                           cutoff=args.cutoff, progress=not args.quiet)
@@ -73,6 +76,10 @@ def _cycle_averaged(args, flights, validate):
                                         cutoff=args.cutoff, progress=not args.quiet)
         report["joint_vs_individual"] = joint_report(comparison)
         print("\n" + joint_summary(comparison))
+        spread = report["joint_vs_individual"]["modes"]["individual_spread"]
+        print("\n" + spread_table(spread, f"mode spread over the {spread['flights']} training "
+                                           "flights, each fitted alone (the joint model's "
+                                           "modes are above):"))
 
     def figures(out):
         fits = [*ident.estimation, *ident.validation]

@@ -1,5 +1,7 @@
-"""Checks on the command line's input paths that need no JAX: a missing file is answered at
-once (the same one line as [`fwid.load_flights`][], which checks everything else)."""
+"""Checks on the command line's input that need no JAX: a missing file is answered at once
+(the same one line as [`fwid.load_flights`][]), and every flight is read and checked with
+numpy (columns the command needs, NaN, time grid, units, vehicle.json) before JAX is
+imported, so bad input exits 2 in a fraction of a second."""
 
 from __future__ import annotations
 
@@ -7,9 +9,45 @@ from pathlib import Path
 
 from .._errors import FlightDataError
 
+#: The columns every flight needs for `fwid identify --model M`: the model's states and
+#: input (`fwid.longitudinal()`, `fwid.lateral()`), the flapping frequency for the flapping
+#: models (whose force columns depend on the axis, checked later).
+IDENTIFY_COLUMNS = {
+    "lon": ("q", "u", "w", "theta", "de"),
+    "lat": ("p", "r", "v", "phi", "dr"),
+    "flap": ("f",),
+    "combined": ("f",),
+}
+#: Models whose constants (mass, inertia, g) come from `vehicle.json`.
+VEHICLE_MODELS = ("lon", "lat", "combined")
+#: The columns every flight needs for `fwid diagnose --axis A` (`fwid.diagnose`'s own list).
+DIAGNOSE_COLUMNS = {
+    "lon": ("u", "w", "q", "theta", "de", "f", "X", "Z", "M"),
+    "lat": ("v", "p", "r", "phi", "dr", "f", "Y", "L", "N"),
+}
+
 
 def check_paths(*groups) -> None:
     """Every path in the lists `groups` exists, else a `FlightDataError` naming it."""
     for p in (p for group in groups for p in group or ()):
         if not Path(p).exists():
             raise FlightDataError(f"{p}: no such file or folder")
+
+
+def read_sets(*groups, require=(), vehicle_for: str | None = None) -> list[list]:
+    """Read and check every flight of each group (a list of CSV files or folders; empty:
+    none) with numpy, before JAX is imported: [`fwid.data.read_flights`][] per group, and,
+    with `vehicle_for` (a model name), a `vehicle.json` beside every flight.
+
+    **Returns:** the groups' records, for [`fwid.data.build_flights`][].
+    """
+    from ..data import read_flights
+
+    sets = [read_flights(*group, require=require) if group else [] for group in groups]
+    for r in (r for records in sets for r in records):
+        if vehicle_for and r.vehicle is None:
+            raise FlightDataError(
+                f"{r.path}: the {vehicle_for} model needs the vehicle's mass and inertia but "
+                "no vehicle.json was found beside the flight; add one (README, \"Your own "
+                "flights\")")
+    return sets

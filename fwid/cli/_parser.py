@@ -23,6 +23,14 @@ class _Effects(Sequence):
         return len(self._all())
 
 
+def _prefix(text: str) -> str:
+    """A `--prefix` that makes plain file names (letters, digits, `-`, `_`, `.`)."""
+    if not text or text[0] == "." or not all(c.isalnum() or c in "-_." for c in text):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a plain file name prefix; use letters, digits, '-', '_' or '.'")
+    return text
+
+
 def parser() -> argparse.ArgumentParser:
     from fwid import __version__
 
@@ -45,6 +53,9 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--strength", type=float, default=1.0,
                    help="effect strength (1: as strong as the noise on its loads)")
     s.add_argument("--seed", type=int, default=0, help="random seed")
+    s.add_argument("--prefix", type=_prefix, default=None,
+                   help="file names PREFIX_0.csv, PREFIX_1.csv, ... (default: the axis, "
+                   "lon_0.csv, ...), so that sets written by separate calls never collide")
     s.add_argument("--duration", type=float, default=4.5, help="seconds per flight")
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
 

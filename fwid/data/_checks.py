@@ -3,9 +3,11 @@
 Each check raises a [`fwid.FlightDataError`][] with one line that names the file, says what
 is wrong and where, and how to fix it, e.g.
 
-`lon_0.csv: column 'q' has NaN at rows 17, 18 (t=0.085 s); fill or cut these samples`
+`lon_0.csv: column 'q' has NaN at lines 19, 20 (t=0.085 s); fill or cut these samples`
 
-Rows are 0-based sample indices (the first data row under the header is row 0).
+Read from a file, places are given as the lines an editor shows (1-based, the header line
+counted: the first sample under a one-line header is line 2); called directly on arrays, as
+0-based sample indices ("row 0" is the first sample).
 
 The strict checks apply to the columns of CONTRACTS section 1 (`KNOWN_COLUMNS`) and to the
 columns a model requires; other (extra) columns are kept as they are and never used by fwid.
@@ -14,9 +16,13 @@ columns a model requires; other (extra) columns are kept as they are and never u
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
-from jaxtyping import ArrayLike, Float
+from jaxtyping import Float
+
+if TYPE_CHECKING:  # jaxtyping's ArrayLike imports JAX, which reading a file needs not
+    from jaxtyping import ArrayLike
 
 from .._errors import FlightDataError
 
@@ -56,12 +62,21 @@ DEGREE_LIMITS = {
 _MAX_ROWS_LISTED = 5
 
 
-def _rows(idx: np.ndarray) -> str:
-    """`row 3` / `rows 3, 4, 5` / `rows 3, 4, 5, 6, 7 and 12 more`."""
-    shown = ", ".join(str(int(i)) for i in idx[:_MAX_ROWS_LISTED])
+def _rows(idx: np.ndarray, lines=None) -> str:
+    """`row 3` / `rows 3, 4, 5` / `rows 3, 4, 5, 6, 7 and 12 more` (0-based samples); with
+    `lines` (each sample's line in the file), `line 5` / `lines 5, 6, 7` instead."""
+    idx = np.asarray(idx)
+    word = "row" if lines is None else "line"
+    at = idx if lines is None else np.asarray(lines)[idx]
+    shown = ", ".join(str(int(i)) for i in at[:_MAX_ROWS_LISTED])
     more = idx.size - _MAX_ROWS_LISTED
-    rows = ("row " if idx.size == 1 else "rows ") + shown
+    rows = (f"{word} " if idx.size == 1 else f"{word}s ") + shown
     return rows + (f" and {more} more" if more > 0 else "")
+
+
+def _row(i: int, lines=None) -> str:
+    """One place: `row i`, or `line L` with `lines`."""
+    return _rows(np.array([i]), lines)
 
 
 def _at(t: np.ndarray | None, i: int) -> str:
@@ -92,20 +107,39 @@ def check_columns(name: str, names: Iterable[str], require: Iterable[str] = ()) 
         )
 
 
-def check_finite(name: str, col: str, x: Float[ArrayLike, " n"], t=None) -> None:
-    """`x` has no NaN (or empty cells) and no infinities."""
-    x = np.asarray(x, dtype=float)
-    bad = ~np.isfinite(x)
-    if not bad.any():
+def _what(x: np.ndarray) -> str:
+    nan = np.isnan(x)
+    return "NaN" if nan.all() else ("infinite values" if not nan.any() else "NaN/infinite values")
+
+
+def check_finite(name: str, col: str, x: Float[ArrayLike, " n"], t=None, lines=None) -> None:
+    """`x` has no NaN (or empty cells) and no infinities. `lines`: each sample's line in
+    the file, for the message (default: 0-based rows)."""
+    check_all_finite(name, {col: x}, t, lines)
+
+
+def check_all_finite(name: str, columns: Mapping[str, ArrayLike], t=None, lines=None) -> None:
+    """No column of `columns` has NaN (or empty cells) or infinities; the message names
+    every bad column at once, with its rows (or `lines`)."""
+    bad = {}
+    for col, x in columns.items():
+        x = np.asarray(x, dtype=float)
+        idx = np.flatnonzero(~np.isfinite(x))
+        if idx.size:
+            bad[col] = (idx, _what(x[idx]))
+    if not bad:
         return
-    idx = np.flatnonzero(bad)
-    nan = np.isnan(x[idx])
-    what = "NaN" if nan.all() else ("infinite values" if not nan.any() else "NaN/infinite values")
     t = None if t is None else np.asarray(t, dtype=float)
-    raise FlightDataError(
-        f"{name}: column '{col}' has {what} at {_rows(idx)}{_at(t, int(idx[0]))}; "
-        "fill or cut these samples"
-    )
+    if len(bad) == 1:
+        (col, (idx, what)), = bad.items()
+        raise FlightDataError(
+            f"{name}: column '{col}' has {what} at {_rows(idx, lines)}{_at(t, int(idx[0]))}; "
+            "fill or cut these samples"
+        )
+    what = {w for _, w in bad.values()}
+    what = what.pop() if len(what) == 1 else "NaN/infinite values"
+    where = ", ".join(f"'{c}' ({_rows(idx, lines)})" for c, (idx, _) in bad.items())
+    raise FlightDataError(f"{name}: columns {where} have {what}; fill or cut these samples")
 
 
 def time_quantum(t: Float[ArrayLike, " n"]) -> float:
@@ -119,8 +153,9 @@ def time_quantum(t: Float[ArrayLike, " n"]) -> float:
     return 0.0
 
 
-def check_time(name: str, t: Float[ArrayLike, " n"]) -> float:
-    """`t` is strictly increasing with a uniform step; returns the typical step [s]."""
+def check_time(name: str, t: Float[ArrayLike, " n"], lines=None) -> float:
+    """`t` is strictly increasing with a uniform step; returns the typical step [s].
+    `lines`: each sample's line in the file, for the message (default: 0-based rows)."""
     t = np.asarray(t, dtype=float)
     if t.shape[0] < 2:
         return float("nan")
@@ -130,8 +165,9 @@ def check_time(name: str, t: Float[ArrayLike, " n"]) -> float:
         i = int(bad[0]) + 1
         how = "repeats" if d[i - 1] == 0 else "goes back to"
         raise FlightDataError(
-            f"{name}: t is not strictly increasing at row {i}: t {how} {t[i]:.6g} s after "
-            f"{t[i - 1]:.6g} s (row {i - 1}); sort the rows by time and remove duplicates"
+            f"{name}: t is not strictly increasing at {_row(i, lines)}: t {how} {t[i]:.6g} s "
+            f"after {t[i - 1]:.6g} s ({_row(i - 1, lines)}); sort the rows by time and remove "
+            "duplicates"
         )
     dt = float(np.median(d))
     quantum = time_quantum(t)
@@ -144,7 +180,8 @@ def check_time(name: str, t: Float[ArrayLike, " n"]) -> float:
         if quantum > UNIFORM_RTOL_MAX * dt:
             hint = " (t is rounded to {:g} s: write it with more decimals)".format(quantum)
         raise FlightDataError(
-            f"{name}: t is not uniformly sampled: the step from row {j} to {j + 1} "
+            f"{name}: t is not uniformly sampled: the step from {_row(j, lines)} to "
+            f"{j + 1 if lines is None else lines[j + 1]} "
             f"(t={t[j]:.6g} s) is {_g(d[j])} s but the typical step is {_g(dt)} s "
             f"({bad.size} step{'s' if bad.size > 1 else ''} off by more than "
             f"{100 * tol / dt:.2g}%){hint}; resample the flight onto a uniform time grid"
@@ -196,16 +233,16 @@ def check_units(name: str, columns: Mapping[str, ArrayLike]) -> None:
                           f"radians and rad/s: {fix} in each")
 
 
-def check_frequency(name: str, f: Float[ArrayLike, " n"], t=None) -> None:
+def check_frequency(name: str, f: Float[ArrayLike, " n"], t=None, lines=None) -> None:
     """The flapping frequency `f` [Hz] is positive and finite."""
     f = np.asarray(f, dtype=float)
-    check_finite(name, "f", f, t)
+    check_finite(name, "f", f, t, lines)
     idx = np.flatnonzero(f <= 0)
     if idx.size:
         t = None if t is None else np.asarray(t, dtype=float)
         raise FlightDataError(
             f"{name}: column 'f' (flapping frequency, Hz) must be positive but is "
-            f"{_g(f[idx[0]])} at {_rows(idx)}{_at(t, int(idx[0]))}; "
+            f"{_g(f[idx[0]])} at {_rows(idx, lines)}{_at(t, int(idx[0]))}; "
             "fix or cut these samples"
         )
 
@@ -215,6 +252,7 @@ def check_flight(
     t: Float[ArrayLike, " n"],
     columns: Mapping[str, ArrayLike],
     require: Iterable[str] = (),
+    lines=None,
 ) -> float:
     """Every check, in order: columns present, finite values, time grid, length, units,
     flapping frequency. `columns` holds every column but `t`.
@@ -224,6 +262,8 @@ def check_flight(
     - `t`: time [s].
     - `columns`: the other columns by name.
     - `require`: columns the caller needs.
+    - `lines`: each sample's line in the file (1-based, as an editor shows it), for the
+      messages; default: 0-based rows.
 
     **Returns:** the time step [s].
 
@@ -232,13 +272,12 @@ def check_flight(
     require = tuple(require)
     check_columns(name, ["t", *columns], require)
     t = np.asarray(t, dtype=float)
-    check_finite(name, "t", t, None)
+    check_finite(name, "t", t, None, lines)
     strict = [c for c in columns if c in KNOWN_COLUMNS or c in require]
-    for c in strict:
-        check_finite(name, c, columns[c], t)
-    dt = check_time(name, t)
+    check_all_finite(name, {c: columns[c] for c in strict}, t, lines)
+    dt = check_time(name, t, lines)
     check_length(name, t)
     check_units(name, {c: columns[c] for c in strict})
     if "f" in columns:
-        check_frequency(name, columns["f"], t)
+        check_frequency(name, columns["f"], t, lines)
     return dt

@@ -2,58 +2,30 @@
 
 The on-disk format is CONTRACTS section 1: one CSV per flight with a header row, comma
 separated, uniformly sampled; `vehicle.json` beside the CSV files.
+
+Reading is in two steps: every file is read and checked with numpy first (`_read`), then
+the `Flight` pytrees are made (`_build`, JAX). A bad file is thus answered before JAX is
+imported, and `load_flights` checks every file before it builds any flight.
 """
 
 from __future__ import annotations
 
-import io
-import json
-import math
 import os
-import re
-import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING, NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 
 from .._errors import FlightDataError
-from ._checks import KNOWN_COLUMNS, check_columns, check_flight
-from ._flight import Flight, Vehicle
+from ._checks import check_columns, check_flight
+from ._csv import read_csv
+from ._folders import flight_files, flight_names
+from ._sidefiles import VEHICLE_FILE, PathLike, read_sidecar, read_vehicle
 from ._trim import estimate_trim, first_input_index, input_column
 
-PathLike = str | os.PathLike
-
-VEHICLE_FILE = "vehicle.json"
-
-_VEHICLE_KEYS = ("mass", "Ix", "Iy", "Iz", "Ixz", "g")
-_VEHICLE_DEFAULTS = {"Ixz": 0.0, "g": 9.81}
-_VEHICLE_SHAPE = '{"mass": kg, "Ix": kg m^2, "Iy": .., "Iz": .., "Ixz": .., "g": 9.81}'
-
-
-# --------------------------------------------------------------------------- vehicle.json
-
-
-def _read_json(path: Path, what: str) -> object:
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as e:
-        raise FlightDataError(f"{path}: cannot read {what} ({e.strerror or e})") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as e:
-        raise FlightDataError(
-            f"{path}: not valid JSON ({e.msg} at line {e.lineno}, column {e.colno}); "
-            f"fix the {what}"
-        ) from None
-
-
-def _number(value) -> float | None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    value = float(value)
-    return value if math.isfinite(value) else None
+if TYPE_CHECKING:
+    from ._flight import Flight, Vehicle
 
 
 def load_vehicle(path: PathLike) -> Vehicle:
@@ -70,224 +42,21 @@ def load_vehicle(path: PathLike) -> Vehicle:
     Raises a [`fwid.FlightDataError`][] naming the file and the key when a key is missing,
     not a finite number, or out of range (mass, `Ix`, `Iy`, `Iz` and `g` must be positive).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FlightDataError(f"{path}: no such file; write {_VEHICLE_SHAPE} there")
-    data = _read_json(path, "vehicle file")
-    if not isinstance(data, dict):
-        raise FlightDataError(f"{path}: expected a JSON object {_VEHICLE_SHAPE}")
-    values = {}
-    for key in _VEHICLE_KEYS:
-        if key not in data:
-            if key in _VEHICLE_DEFAULTS:
-                values[key] = _VEHICLE_DEFAULTS[key]
-                continue
-            close = [k for k in data if isinstance(k, str) and k.lower() == key.lower()]
-            fix = (
-                f"rename '{close[0]}' to '{key}'"
-                if close
-                else f"add it (expected {_VEHICLE_SHAPE})"
-            )
-            raise FlightDataError(f"{path}: missing key '{key}'; {fix}")
-        value = _number(data[key])
-        if value is None:
-            raise FlightDataError(
-                f"{path}: key '{key}' must be a finite number, got {data[key]!r}"
-            )
-        if key != "Ixz" and value <= 0:
-            unit = {"mass": "kg", "g": "m/s^2"}.get(key, "kg m^2")
-            raise FlightDataError(
-                f"{path}: key '{key}' must be positive, got {value:g}; give it in {unit}"
-            )
-        values[key] = value
-    return Vehicle(**values)
+    from ._flight import Vehicle
+
+    return Vehicle(**read_vehicle(path))
 
 
-# --------------------------------------------------------------------------- CSV
+class FlightRecord(NamedTuple):
+    """One flight read and checked, in numpy: what `_build` turns into a `Flight`."""
 
-
-def _split_header(line: str) -> list[str]:
-    line = line.strip()
-    if line.startswith("#"):
-        line = line[1:]
-    return [f.strip().strip('"').strip("'").strip() for f in line.split(",")]
-
-
-def _is_float(s: str) -> bool:
-    try:
-        float(s)
-    except ValueError:
-        return False
-    return True
-
-
-def _read_csv(path: Path, name: str, require: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """All numeric columns of the CSV by name (`t` included), in file order.
-
-    Columns named in CONTRACTS section 1 or in `require` must be fully numeric (an empty
-    cell reads as NaN, caught later); an extra column with non-numeric cells is dropped.
-    """
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise FlightDataError(f"{name}: cannot read the file ({e.strerror or e})") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise FlightDataError(
-            f"{name}: not a text file (cannot decode as UTF-8); save the flight as a CSV "
-            "text file"
-        ) from None
-    lines = text.splitlines()
-    # The header: the first non-blank line, skipping leading '#' comments without commas.
-    h = next(
-        (
-            i
-            for i, ln in enumerate(lines)
-            if ln.strip() and not (ln.lstrip().startswith("#") and "," not in ln)
-        ),
-        None,
-    )
-    if h is None:
-        raise FlightDataError(f"{name}: file is empty; expected a header row and data rows")
-    header = _split_header(lines[h])
-    if len(header) == 1:
-        for sep, word in ((";", "semicolons"), ("\t", "tabs")):
-            if sep in lines[h]:
-                raise FlightDataError(
-                    f"{name}: columns are separated by {word}, not commas; save the file as "
-                    "comma-separated values"
-                )
-    if all(_is_float(f) for f in header if f):
-        raise FlightDataError(
-            f"{name}: line {h + 1} has no column names; add a header row such as "
-            "'t,q,u,w,theta,de'"
-        )
-    seen: dict[str, int] = {}
-    for j, col in enumerate(header):
-        if not col:
-            continue  # unnamed (e.g. a trailing comma): ignored
-        if col in seen:
-            raise FlightDataError(
-                f"{name}: column '{col}' appears twice in the header (columns {seen[col] + 1} "
-                f"and {j + 1}); rename or remove one"
-            )
-        seen[col] = j
-    names = list(seen)
-    usecols = [seen[c] for c in names]
-    strict = set(KNOWN_COLUMNS) | set(require)
-
-    data_lines = lines[h + 1 :]
-    commas = len(header) - 1
-    ragged = any(
-        ln.count(",") != commas and ln.strip() and not ln.lstrip().startswith("#")
-        for ln in data_lines
-    )
-    if ragged:  # rows with more or fewer fields than the header: find and name them
-        return _read_csv_slow(name, header, names, seen, data_lines, h + 2, strict)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            arr = np.loadtxt(
-                io.StringIO("\n".join(data_lines)),
-                delimiter=",",
-                comments="#",
-                usecols=usecols,
-                ndmin=2,
-                dtype=float,
-            )
-    except ValueError:
-        return _read_csv_slow(name, header, names, seen, data_lines, h + 2, strict)
-    if arr.shape[0] == 0:
-        raise FlightDataError(f"{name}: no data rows under the header; the file holds no samples")
-    return {c: arr[:, k] for k, c in enumerate(names)}
-
-
-def _read_csv_slow(name, header, names, seen, data_lines, first_line_no, strict):
-    """Cell-by-cell parse of a file numpy could not read: finds the bad cell."""
-    rows: list[list[str]] = []
-    line_nos: list[int] = []
-    nf = len(header)
-    for k, ln in enumerate(data_lines):
-        s = ln.strip()
-        if not s or s.startswith("#"):
-            continue
-        fields = ln.split(",")
-        if len(fields) != nf:
-            if len(fields) > nf and not any(f.strip() for f in fields[nf:]):
-                fields = fields[:nf]
-            else:
-                raise FlightDataError(
-                    f"{name}: line {first_line_no + k} has {len(fields)} fields but the header "
-                    f"has {nf}; fix the row or remove it"
-                )
-        rows.append(fields)
-        line_nos.append(first_line_no + k)
-    if not rows:
-        raise FlightDataError(f"{name}: no data rows under the header; the file holds no samples")
-    out = {}
-    for col in names:
-        j = seen[col]
-        cells = [r[j].strip().strip('"') for r in rows]
-        values = np.empty(len(cells))
-        bad = None
-        for i, c in enumerate(cells):
-            if not c:
-                values[i] = np.nan
-                continue
-            try:
-                values[i] = float(c)
-            except ValueError:
-                bad = i
-                break
-        if bad is None:
-            out[col] = values
-        elif col in strict:
-            raise FlightDataError(
-                f"{name}: non-numeric value {cells[bad]!r} in column '{col}' at row {bad} "
-                f"(line {line_nos[bad]}); write a number there or remove the row"
-            )
-        # else: a non-numeric extra column, dropped (fwid ignores extra columns)
-    return out
-
-
-# --------------------------------------------------------------------------- sidecar
-
-
-def _read_sidecar(path: Path) -> tuple[dict[str, float], int | None]:
-    """The trim values and first-input index given by the sidecar `NAME.json`, if any."""
-    side = path.with_suffix(".json")
-    if side.name == VEHICLE_FILE or not side.is_file():
-        return {}, None
-    data = _read_json(side, "sidecar")
-    if not isinstance(data, dict):
-        raise FlightDataError(f'{side}: expected a JSON object such as {{"trim": {{"u0": ..}}}}')
-    trim_in = data.get("trim", {})
-    if not isinstance(trim_in, dict):
-        raise FlightDataError(
-            f'{side}: "trim" must be an object such as {{"u0": .., "w0": .., "theta0": ..}}'
-        )
-    trim = {}
-    for key, value in trim_in.items():
-        if not (isinstance(key, str) and len(key) > 1 and key.endswith("0")):
-            raise FlightDataError(
-                f"{side}: trim key {key!r} is not '<column>0' (e.g. 'u0', 'theta0'); rename it"
-            )
-        v = _number(value)
-        if v is None:
-            raise FlightDataError(
-                f"{side}: trim value '{key}' must be a finite number, got {value!r}"
-            )
-        trim[key] = v
-    first = data.get("first_input")
-    if first is not None and (isinstance(first, bool) or not isinstance(first, int) or first < 0):
-        raise FlightDataError(
-            f"{side}: 'first_input' must be a sample index (an integer >= 0), got {first!r}"
-        )
-    return trim, first
-
-
-# --------------------------------------------------------------------------- flights
+    t: np.ndarray
+    columns: dict[str, np.ndarray]
+    trim: dict[str, float]
+    first: int
+    vehicle: object  # a Vehicle, the dict of a vehicle.json, or None
+    name: str
+    path: str  # the file, as given (for messages)
 
 
 def _as_require(require) -> tuple[str, ...]:
@@ -296,9 +65,64 @@ def _as_require(require) -> tuple[str, ...]:
     return tuple(require)
 
 
-def _vehicle_beside(path: Path) -> Vehicle | None:
+def _vehicle_beside(path: Path) -> dict[str, float] | None:
     vpath = path.parent / VEHICLE_FILE
-    return load_vehicle(vpath) if vpath.is_file() else None
+    return read_vehicle(vpath) if vpath.is_file() else None
+
+
+def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None) -> FlightRecord:
+    """Read and check one flight with numpy (no JAX): every error `load_flight` can raise."""
+    if path.is_dir():
+        raise FlightDataError(f"{path}: is a folder, not a flight file; use load_flights")
+    if not path.is_file():
+        raise FlightDataError(f"{path}: no such file")
+    where = str(path)  # messages name the path as given
+    table, lines = read_csv(path, where, require)
+    t = table.pop("t", None)
+    columns = table
+    if t is None:
+        check_columns(where, list(columns), require)  # raises: names the missing 't'
+    check_flight(where, t, columns, require, lines)
+    n = t.shape[0]
+    t = t[0] + np.arange(n) * ((t[-1] - t[0]) / (n - 1))
+
+    if vehicle is None:
+        vehicle = _vehicle_beside(path)
+    elif isinstance(vehicle, (str, os.PathLike)):
+        vehicle = read_vehicle(vehicle)
+
+    trim_given, first_given = read_sidecar(path)
+    if first_given is not None:
+        if first_given >= n:
+            raise FlightDataError(
+                f"{path.with_suffix('.json')}: 'first_input' = {first_given} is beyond the "
+                f"flight's {n} samples; give a row index below {n}"
+            )
+        first = first_given
+    else:
+        col = input_column(columns, t)
+        first = first_input_index(t, columns[col]) if col is not None else None
+        first = 0 if first is None else first
+    trim = estimate_trim(columns, t, first_input=first)
+    trim.update(trim_given)
+    return FlightRecord(t, columns, trim, int(first), vehicle, name or path.name, where)
+
+
+def _build(raw: FlightRecord) -> Flight:
+    """The `Flight` pytree of a flight read by `_read` (imports JAX)."""
+    import jax.numpy as jnp
+
+    from ._flight import Flight, Vehicle
+
+    vehicle = Vehicle(**raw.vehicle) if isinstance(raw.vehicle, dict) else raw.vehicle
+    return Flight(
+        t=jnp.asarray(raw.t, dtype=float),
+        columns={c: jnp.asarray(x, dtype=float) for c, x in raw.columns.items()},
+        trim={k: jnp.asarray(v, dtype=float) for k, v in raw.trim.items()},
+        vehicle=vehicle,
+        name=raw.name,
+        first_input=raw.first,
+    )
 
 
 def load_flight(
@@ -315,7 +139,7 @@ def load_flight(
     `Flight.columns` (extra columns are kept; non-numeric extra columns are dropped). The
     data are checked (see `fwid.data._checks`): any problem raises a
     [`fwid.FlightDataError`][] whose one-line message names the file, the column and the
-    rows, and says how to fix it. The time stamps, once checked to be uniform, are stored
+    lines, and says how to fix it. The time stamps, once checked to be uniform, are stored
     as the exact uniform grid through the first and last time stamps.
 
     The first input is found with [`fwid.data.first_input_index`][] on `de` or `dr`,
@@ -335,82 +159,40 @@ def load_flight(
 
     **Returns:** a [`fwid.data.Flight`][].
     """
-    path = Path(path)
+    return _build(_read(Path(path), vehicle, _as_require(require), name))
+
+
+def read_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> list[FlightRecord]:
+    """Read and check the flights that `paths_or_folders` stand for, with numpy only (no
+    JAX): every error [`load_flights`][] can raise, and the records [`build_flights`][]
+    turns into flights. A caller that loads two sets (e.g. training and validation flights)
+    reads both first, so that a bad file in either is answered before JAX is imported."""
     require = _as_require(require)
-    if path.is_dir():
-        raise FlightDataError(f"{path}: is a folder, not a flight file; use load_flights")
-    if not path.is_file():
-        raise FlightDataError(f"{path}: no such file")
-    name = name or path.name
-    where = str(path)  # messages name the path as given
-    table = _read_csv(path, where, require)
-    t = table.pop("t", None)
-    columns = table
-    if t is None:
-        check_columns(where, list(columns), require)  # raises: names the missing 't'
-    check_flight(where, t, columns, require)
-    n = t.shape[0]
-    t = t[0] + np.arange(n) * ((t[-1] - t[0]) / (n - 1))
-
-    if vehicle is None:
-        vehicle = _vehicle_beside(path)
-    elif not isinstance(vehicle, Vehicle):
-        vehicle = load_vehicle(vehicle)
-
-    trim_given, first_given = _read_sidecar(path)
-    if first_given is not None:
-        if first_given >= n:
-            raise FlightDataError(
-                f"{path.with_suffix('.json')}: 'first_input' = {first_given} is beyond the "
-                f"flight's {n} samples; give a row index below {n}"
-            )
-        first = first_given
-    else:
-        col = input_column(columns, t)
-        first = first_input_index(t, columns[col]) if col is not None else None
-        first = 0 if first is None else first
-    trim = estimate_trim(columns, t, first_input=first)
-    trim.update(trim_given)
-
-    return Flight(
-        t=jnp.asarray(t, dtype=float),
-        columns={c: jnp.asarray(x, dtype=float) for c, x in columns.items()},
-        trim={k: jnp.asarray(v, dtype=float) for k, v in trim.items()},
-        vehicle=vehicle,
-        name=name,
-        first_input=int(first),
-    )
+    files = flight_files(*paths_or_folders)
+    vehicles: dict[Path, object] = {}
+    records = []
+    for f, name in zip(files, flight_names(files)):
+        key = f.parent.resolve()
+        if key not in vehicles:
+            vehicles[key] = _vehicle_beside(f)
+        records.append(_read(f, vehicles[key], require, name))
+    return records
 
 
-def _flatten(items) -> list:
+def build_flights(records: Iterable[FlightRecord]) -> list[Flight]:
+    """The `Flight`s of records read by [`read_flights`][] (imports JAX); flights that share
+    a `vehicle.json` share one `Vehicle`."""
+    built: dict[int, object] = {}
     out = []
-    for it in items:
-        if isinstance(it, (list, tuple)):
-            out.extend(_flatten(it))
-        else:
-            out.append(it)
+    for r in records:
+        if isinstance(r.vehicle, dict):
+            if id(r.vehicle) not in built:
+                from ._flight import Vehicle
+
+                built[id(r.vehicle)] = Vehicle(**r.vehicle)
+            r = r._replace(vehicle=built[id(r.vehicle)])
+        out.append(_build(r))
     return out
-
-
-def natural_key(name: str) -> list:
-    """Sort key that orders numbers by value: `lon_2` before `lon_10`."""
-    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", name)]
-
-
-def _csv_files(folder: Path) -> list[Path]:
-    return sorted(
-        (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".csv"),
-        key=lambda p: natural_key(p.name),
-    )
-
-
-def flight_names(files: Sequence[Path]) -> list[str]:
-    """Names that tell the flights apart: each file's path relative to the folder the files
-    have in common (`lon_0.csv` for one folder, `clean/lon_0.csv` and `demo/lon_0.csv` for
-    two), in `/` form."""
-    parents = [str(f.resolve().parent) for f in files]
-    root = Path(os.path.commonpath(parents)) if parents else Path(".")
-    return [f.resolve().relative_to(root).as_posix() for f in files]
 
 
 def load_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> list[Flight]:
@@ -419,8 +201,9 @@ def load_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> li
     A folder stands for all its `*.csv` files, sorted by name with numbers by value
     (`lon_2` before `lon_10`; `vehicle.json` and the
     sidecars `NAME.json` are read alongside, not as flights). Lists of paths are accepted
-    too. Each flight is read with [`fwid.data.load_flight`][], with `vehicle.json` looked
-    up beside it.
+    too. Each flight is read as by [`fwid.data.load_flight`][], with `vehicle.json` looked
+    up beside it; every file is read and checked before any flight is built (and before
+    JAX is imported), so a bad file is answered at once.
 
     **Arguments:**
     - `*paths_or_folders`: CSV files and/or folders.
@@ -433,30 +216,4 @@ def load_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> li
     Raises a [`fwid.FlightDataError`][] when no path is given, a path does not exist, or a
     folder holds no CSV file.
     """
-    require = _as_require(require)
-    items = _flatten(paths_or_folders)
-    if not items:
-        raise FlightDataError("no flight files given; pass CSV files or folders of them")
-    files: list[Path] = []
-    for item in items:
-        p = Path(item)
-        if p.is_dir():
-            found = _csv_files(p)
-            if not found:
-                raise FlightDataError(
-                    f"{p}: folder holds no .csv flight files; point to the folder with the "
-                    "flights"
-                )
-            files.extend(found)
-        elif p.is_file():
-            files.append(p)
-        else:
-            raise FlightDataError(f"{p}: no such file or folder")
-    vehicles: dict[Path, Vehicle | None] = {}
-    flights = []
-    for f, name in zip(files, flight_names(files)):
-        key = f.parent.resolve()
-        if key not in vehicles:
-            vehicles[key] = _vehicle_beside(f)
-        flights.append(load_flight(f, vehicle=vehicles[key], require=require, name=name))
-    return flights
+    return build_flights(read_flights(*paths_or_folders, require=require))

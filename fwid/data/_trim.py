@@ -9,9 +9,13 @@ per file, at load time.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
-from jaxtyping import ArrayLike, Float
+from jaxtyping import Float
+
+if TYPE_CHECKING:  # jaxtyping's ArrayLike imports JAX, which reading a file needs not
+    from jaxtyping import ArrayLike
 
 #: Control-input columns, in the order they are preferred when both vary equally.
 INPUT_COLUMNS = ("de", "dr")

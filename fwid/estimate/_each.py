@@ -13,10 +13,12 @@ from jax.sharding import PartitionSpec
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
+from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ._devices import device_count, flight_mesh, padded_count
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result, with_instability
+from ._start_each import least_squares_start_each
 from ._warnings import issue
 
 
@@ -55,8 +57,9 @@ def fit_each(
 ) -> list[FitResult]:
     """Fit `model` to each experiment on its own, all in one vmapped call.
 
-    The flights are padded to a common length and masked (a padded sample never enters a
-    cost), so one compiled estimator serves every flight and the whole batch runs as a single
+    The flights are padded to a common length, one of a few (`fwid.simulate.bucket_length`),
+    and masked (a padded sample never enters a cost), so one compiled estimator serves every
+    flight, and flights of a new length mostly reuse it, and the whole batch runs as a single
     XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
     on each flight alone. Arguments as for [`fwid.fit`][].
 
@@ -67,7 +70,10 @@ def fit_each(
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
-        starts = [_prepare(model, [e], [n], start, 0) for e, n in zip(exps, names)]
+        for e, n in zip(exps, names):  # the checks first, flight by flight
+            _prepare(model, [e], [n], "model", 0)
+        starts = [_prepare(model, [e], [n], s, 0)  # all starts in one batched call
+                  for e, n, s in zip(exps, names, least_squares_start_each(model, exps))]
     else:  # one start for all (the checks still run on every flight)
         starts = [_prepare(model, exps, names, start, 0)] * len(exps)
     kw = dict(max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol)
@@ -110,7 +116,8 @@ def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
     flight, whose results are dropped."""
     B = padded_count(len(exps))
     fill = [exps[-1]] * (B - len(exps))
-    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill))
+    n = bucket_length(max(e.n for e in exps))  # a few lengths: a new one rarely compiles
+    stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill, n))
     th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
     out = jax.device_get(_fit_each_batched(model, th, stacked, flight_mesh(B),
                                            diagonal=diagonal, n_local_batch=0, **kw))

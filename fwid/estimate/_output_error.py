@@ -15,6 +15,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
+from ..simulate._buckets import bucket_length, pad_experiment
 from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ..simulate._simulate import simulate, simulate_sensitivities
@@ -328,8 +329,10 @@ def fit(
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
               f"{', '.join(names)} ...", flush=True)
-    fn, data = (_fit_one_jit, exps[0]) if len(exps) == 1 else (_fit_batch_jit,
-                                                               stack_experiments(exps))
+    # padded (masked) to one of a few lengths: a flight of a new length reuses the program
+    n = bucket_length(max(e.n for e in exps))
+    fn, data = ((_fit_one_jit, pad_experiment(exps[0], n)) if len(exps) == 1
+                else (_fit_batch_jit, stack_experiments(exps, n)))
 
     def run(diagonal: bool) -> FitResult:
         out = fn(start_model, theta0, data, diagonal=diagonal, max_passes=max_passes,

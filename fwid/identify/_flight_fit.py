@@ -11,6 +11,7 @@ import numpy as np
 from ..estimate._local import refit_local_affine
 from ..estimate._output_error import fit
 from ..models._greybox import GreyBoxModel
+from ..simulate._buckets import pad_experiment
 from ..simulate._experiment import Experiment
 from ..simulate._simulate import simulate, simulate_forces
 from ..validate._metrics import fit_metrics
@@ -78,19 +79,22 @@ def evaluate(
     its own trim errors, which the biases exist to absorb.
     """
     local = {}
+    n = exp.n
+    padded = pad_experiment(exp)  # one of a few lengths: a new length rarely compiles
     if refit_local and model.local:
         # bias terms enter affinely: a weighted linear solve (no second estimator to compile);
         # the full ML fit of the biases otherwise
-        local = refit_local_affine(model, exp)
+        local = refit_local_affine(model, padded)
         if local is None:
             r = fit(model.with_free(model.local), exp, names=[name], start="model")
             local = {k: float(r.model.params[k]) for k in model.local}
         model = model.with_params(local)
-    xs, ys = simulate(model, exp)
+    xs, ys = simulate(model, padded)  # the padding, simulated after the end, is cut off
     forces = model.forces is not None and exp.forces is not None
     return flight_fit(
         name, exp.t, {k: np.asarray(exp.u[:, j]) for j, k in enumerate(model.inputs)},
-        model.outputs, exp.z, ys, force_names=model.force_names if forces else (),
+        model.outputs, exp.z, ys[:n], force_names=model.force_names if forces else (),
         forces_measured=exp.forces if forces else None,
-        forces_simulated=simulate_forces(model, xs, exp) if forces else None, local=local,
+        forces_simulated=simulate_forces(model, xs, padded)[:n] if forces else None,
+        local=local,
     )

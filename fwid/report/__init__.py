@@ -48,4 +48,5 @@ from ._table import (
     metrics_table as metrics_table,
     modes_table as modes_table,
     parameter_table as parameter_table,
+    spread_table as spread_table,
 )

@@ -88,17 +88,23 @@ def modes_spread(per_flight_modes: list[list[dict]]) -> dict:
     osc = [[m for m in ms if m["kind"] == "oscillatory"] for ms in per_flight_modes]
     ape = [sorted(m["tau"] for m in ms if m["kind"] == "aperiodic") for ms in per_flight_modes]
     out = {"flights": len(per_flight_modes)}
+
+    def std(x):
+        return x.std(ddof=1) if len(x) > 1 else 0.0
+
     if all(osc):
         wn = np.array([o[0]["wn"] for o in osc])
         zeta = np.array([o[0]["zeta"] for o in osc])
-        out["oscillatory"] = {"wn_mean": wn.mean(), "wn_std": wn.std(ddof=1) if len(wn) > 1 else 0.0,
-                              "zeta_mean": zeta.mean(),
-                              "zeta_std": zeta.std(ddof=1) if len(zeta) > 1 else 0.0}
+        out["oscillatory"] = {"wn_mean": wn.mean(), "wn_std": std(wn), "wn_min": wn.min(),
+                              "wn_max": wn.max(), "zeta_mean": zeta.mean(),
+                              "zeta_std": std(zeta), "zeta_min": zeta.min(),
+                              "zeta_max": zeta.max()}
     k = min(len(a) for a in ape)
     if k:
         taus = np.array([a[:k] for a in ape])
-        out["aperiodic_tau"] = [{"mean": taus[:, j].mean(), "min": taus[:, j].min(),
-                                 "max": taus[:, j].max()} for j in range(k)]
+        out["aperiodic_tau"] = [{"mean": taus[:, j].mean(), "std": std(taus[:, j]),
+                                 "min": taus[:, j].min(), "max": taus[:, j].max()}
+                                for j in range(k)]
     return out
 
 

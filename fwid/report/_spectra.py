@@ -76,12 +76,22 @@ def _spectrum_axes(ax, freqs, series, f_flap, harmonics, fmax, unit):
     ax.set_ylim(0, 1.1 * top if top > 0 else 1.0)
 
 
+def zoom_window(t: np.ndarray, f: float | None, cycles: int) -> tuple[float, float]:
+    """`cycles` flapping cycles (of `f` Hz) in the middle of the record `t` [s]; without `f`,
+    a tenth of the record."""
+    t0, t1 = float(t[0]), float(t[-1])
+    width = min(cycles / f if f else 0.1 * (t1 - t0), t1 - t0)
+    mid = 0.5 * (t0 + t1)
+    return mid - 0.5 * width, mid + 0.5 * width
+
+
 def plot_time_and_spectrum(
     flight_fit,
     *,
     f: float | None = None,
     harmonics: int = 3,
     fmax: float | None = None,
+    zoom_cycles: int = 4,
     path: str | Path | None = None,
     title: str = "",
     measured_label: str = "Reconstructed",
@@ -90,14 +100,19 @@ def plot_time_and_spectrum(
     """Measured vs model in the time domain and as amplitude spectra (Figures 12-14, 16, 17).
 
     One row per signal of the [`fwid.FlightFit`][] (its outputs, then its forces, if any):
-    left the time histories with the scaled input (the paper's "scaled elev. input"), right
-    the amplitude spectra on a logarithmic frequency axis with the flapping harmonics dotted.
+    left the whole time history with the scaled input (the paper's "scaled elev. input"),
+    the zoomed span shaded; middle a zoom on `zoom_cycles` flapping cycles in the middle of
+    the record, where the model's waveform can be read against the data (the RMS error in its
+    title); right the amplitude spectra, in the signal's unit, on a logarithmic frequency
+    axis with the flapping harmonics dotted.
 
     **Arguments:**
     - `flight_fit`: a [`fwid.FlightFit`][] (its first input is drawn scaled).
-    - `f`: the (mean) flapping frequency [Hz], for the harmonic marks and the axis range.
+    - `f`: the (mean) flapping frequency [Hz], for the harmonic marks, the zoom and the axis
+      range.
     - `harmonics`: how many harmonics to mark.
     - `fmax`: the top of the frequency axis (default: Nyquist, at most 60 Hz).
+    - `zoom_cycles`: flapping cycles in the zoom (without `f`: a tenth of the record).
     - `path`: where to save the figure (format from the suffix).
     - `title`, `measured_label`, `model_label`: labels.
 
@@ -109,36 +124,44 @@ def plot_time_and_spectrum(
     signals += [(k, flight_fit.forces_measured[k], flight_fit.forces_simulated[k])
                 for k in flight_fit.forces_measured]
     nrow = len(signals)
-    fig = Figure(figsize=(11, 1.9 * nrow + 0.7), layout="constrained")
-    axes = fig.subplots(nrow, 2, squeeze=False, gridspec_kw=dict(width_ratios=(1.6, 1)))
+    fig = Figure(figsize=(14, 1.9 * nrow + 0.7), layout="constrained")
+    axes = fig.subplots(nrow, 3, squeeze=False, gridspec_kw=dict(width_ratios=(1.6, 0.9, 1)))
     fmax = min(60.0, 0.5 / dt) if fmax is None else fmax
     inputs = {k: v for k, v in flight_fit.inputs.items() if k != "phase"}
     u_name, u = next(iter(inputs.items())) if inputs else (None, None)
+    lo, hi = zoom_window(t, f, zoom_cycles)
+    span = (t >= lo) & (t <= hi)
     for row, (k, zm, ys) in enumerate(signals):
         zm, ys = _display(k, zm), _display(k, ys)
-        ax = axes[row, 0]
-        ax.plot(t, zm, color="0.2", lw=0.9, label=measured_label)
-        ax.plot(t, ys, color="C3", lw=1.0, ls="--", label=model_label)
+        unit = _unit(k)
+        label = f"{k} [{unit}]" if unit else k
+        ax, zoom = axes[row, 0], axes[row, 1]
+        for a, sel in ((ax, slice(None)), (zoom, span)):
+            a.plot(t[sel], zm[sel], color="0.2", lw=0.9, label=measured_label)
+            a.plot(t[sel], ys[sel], color="C3", lw=1.0, ls="--", label=model_label)
         if u is not None and np.ptp(u) > 0:
             ax.plot(t, _scaled_input(np.asarray(u), zm), color="C0", lw=0.8, alpha=0.6,
                     label=f"Scaled {u_name} input")
-        unit = _unit(k)
-        ax.set_ylabel(f"{k} [{unit}]" if unit else k)
+        ax.axvspan(lo, hi, color="C1", alpha=0.12, lw=0)
+        ax.set_ylabel(label)
+        zoom.set_xlim(lo, hi)
         m = flight_fit.metrics.get(k)
         if m:
             rms = float(_display(k, m["rms"]))
-            ax.text(0.99, 0.95, f"RMS {rms:.3g} {unit} ({m['rms_pct']:.1f} % of range)",
-                    ha="right", va="top", transform=ax.transAxes, fontsize=7)
+            zoom.set_title(f"RMS {rms:.3g} {unit} ({m['rms_pct']:.1f} % of range)", fontsize=7)
         freqs, amp = amplitude_spectrum(np.stack([zm, ys]), dt)
-        _spectrum_axes(axes[row, 1], freqs,
+        _spectrum_axes(axes[row, 2], freqs,
                        [(measured_label, amp[0], dict(color="0.2", lw=0.9)),
                         (model_label, amp[1], dict(color="C3", lw=1.0, ls="--"))],
                        f, harmonics, fmax, unit)
-        axes[row, 1].set_ylabel(f"|{k}|")
-    axes[0, 0].legend(fontsize=7, loc="upper left", ncol=3)
-    axes[0, 1].legend(fontsize=7, loc="upper right")
+        axes[row, 2].set_ylabel(f"|{k}| [{unit}]" if unit else f"|{k}|")
+    axes[0, 0].legend(fontsize=7, loc="lower left", bbox_to_anchor=(0, 1), ncol=3,
+                      frameon=False)  # above the panel, off the traces
+    axes[0, 2].legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("t [s]")
-    axes[-1, 1].set_xlabel("f [Hz]")
+    cycles = f" ({zoom_cycles} flapping cycles)" if f else ""
+    axes[-1, 1].set_xlabel(f"t [s], zoom{cycles}")
+    axes[-1, 2].set_xlabel("f [Hz]")
     fig.suptitle(title or flight_fit.name)
     if path is not None:
         fig.savefig(path, dpi=110)
@@ -218,7 +241,8 @@ def plot_steady_vs_manoeuvre(
         dt = float(t[1] - t[0])
         fmax = min(60.0, 0.5 / dt)
         for row, k in enumerate(names):
-            freqs, amp = amplitude_spectrum(np.stack([ff.measured[k], ff.simulated[k]]), dt)
+            freqs, amp = amplitude_spectrum(
+                np.stack([_display(k, ff.measured[k]), _display(k, ff.simulated[k])]), dt)
             _spectrum_axes(axes[row, col], freqs,
                            [("Reconstructed", amp[0], dict(color="0.2", lw=0.9)),
                             ("Estimated", amp[1], dict(color="C3", lw=1.0, ls="--"))],
@@ -228,7 +252,8 @@ def plot_steady_vs_manoeuvre(
                 axes[row, col].text(0.99, 0.95, f"RMS {m['rms_pct']:.1f} % of range",
                                     ha="right", va="top", fontsize=7,
                                     transform=axes[row, col].transAxes)
-            axes[row, col].set_ylabel(f"|{k}|")
+            unit = _unit(k)
+            axes[row, col].set_ylabel(f"|{k}| [{unit}]" if unit else f"|{k}|")
         axes[0, col].set_title(f"{label} ({t[-1] - t[0] + dt:.1f} s)", fontsize=9)
         axes[-1, col].set_xlabel("f [Hz]")
     axes[0, 0].legend(fontsize=7)

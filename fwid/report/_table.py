@@ -61,6 +61,23 @@ def modes_table(modes: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def spread_table(spread: dict, title: str = "") -> str:
+    """The spread of the modes over flights fitted one by one (`modes_spread` of
+    report.json): mean, sample std, min and max of the oscillatory mode's natural frequency
+    and damping and of each aperiodic time constant."""
+    lines = [title or f"mode spread over {spread['flights']} flights (each fitted alone):",
+             f"{'':<14}{'mean':>10}{'std':>10}{'min':>10}{'max':>10}"]
+    osc = spread.get("oscillatory")
+    if osc:
+        for key, label in (("wn", "wn [rad/s]"), ("zeta", "zeta")):
+            lines.append(f"{label:<14}" + "".join(f"{osc[f'{key}_{s}']:>10.4g}"
+                                                   for s in ("mean", "std", "min", "max")))
+    for j, tau in enumerate(spread.get("aperiodic_tau", [])):
+        lines.append(f"{f'tau {j + 1} [s]':<14}" + "".join(
+            f"{tau.get(s, float('nan')):>10.4g}" for s in ("mean", "std", "min", "max")))
+    return "\n".join(lines)
+
+
 def warnings_lines(report: dict) -> list[str]:
     """The report's `warnings`, one `WARNING:` line each (none when there are none)."""
     return [""] + [f"WARNING: {w}" for w in report["warnings"]] if report.get("warnings") else []
@@ -72,6 +89,8 @@ def identification_summary(report: dict) -> str:
     if "summary" in report:
         out.append(f"({report['summary']})")
     out += ["", parameter_table(report["parameters"]), "", modes_table(report["modes"]), ""]
+    if "modes_spread" in report:
+        out += [spread_table(report["modes_spread"]), ""]
     out.append(metrics_table(report["metrics"]["estimation"], "match with estimation data:"))
     if "validation" in report["metrics"]:
         out += ["", metrics_table(report["metrics"]["validation"], "match with validation data:")]

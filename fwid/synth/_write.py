@@ -61,10 +61,13 @@ def write_flights(
     strength: float | tuple = 1.0,
     truth_columns: bool = False,
     form: str | tuple | None = None,
+    prefix: str | None = None,
     **kw,
 ) -> list[Path]:
     """Simulate `n_flights` flights and write `lon_0.csv, lon_1.csv, ...` (or `lat_*`), their
     sidecars `lon_0.json, ...` and `vehicle.json` into `out_dir` (created if needed).
+    `prefix` replaces the axis in the names (`prefix="train"`: `train_0.csv, ...`), so that
+    sets written into one folder by separate calls do not overwrite each other.
 
     Flight `i` is drawn from `numpy.random.default_rng(seed + i)`: the input type cycles
     through `INPUT_CYCLE` (3211, doublet, 211, pulse), the amplitude is
@@ -80,6 +83,7 @@ def write_flights(
     """
     if n_flights < 0:
         raise ValueError(f"n_flights must be >= 0, got {n_flights}")
+    stem = axis if prefix is None else prefix
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     vehicle = kw.get("vehicle", DELFLY)
@@ -94,7 +98,7 @@ def write_flights(
         args.update(kw)
         flight = simulate_flight(axis=axis, seed=sim_seed, effect=effect, strength=strength,
                                  form=form, **args)
-        csv = write_csv(out / f"{axis}_{i}.csv", flight, truth_columns)
+        csv = write_csv(out / f"{stem}_{i}.csv", flight, truth_columns)
         write_sidecar(csv.with_suffix(".json"), flight)
         paths.append(csv)
     return paths

@@ -100,7 +100,7 @@ def _scale(col, factor):
 
 @pytest.mark.parametrize("name, edit, words", [
     ("nocol.csv", _drop_column("w"), ["nocol.csv", "'w'"]),
-    ("nan.csv", _set("q", 17, "nan"), ["nan.csv", "'q'", "NaN", "17"]),
+    ("nan.csv", _set("q", 17, "nan"), ["nan.csv", "'q'", "NaN", "line 19"]),
     ("deg.csv", _scale("theta", 180 / np.pi), ["deg.csv", "theta", "degrees"]),
     ("nonuni.csv", _set("t", 300, "1.5013"), ["nonuni.csv", "uniform"]),
     ("short.csv", lambda h, r: (h, r[:30]), ["short.csv", "short"]),

@@ -10,6 +10,7 @@ import pytest
 from fwid import FlightDataError, InputError
 from fwid.data import load_flight
 from fwid.data._checks import (
+    check_finite,
     check_flight,
     check_frequency,
     check_length,
@@ -142,29 +143,52 @@ def test_nan_names_column_rows_and_time(tmp_path):
     path = write_csv(tmp_path / "lon_0.csv", c)
     msg = _error(path)
     assert msg == (
-        f"{path}: column 'q' has NaN at rows 17, 18 (t=0.085 s); fill or cut these samples"
+        f"{path}: column 'q' has NaN at lines 19, 20 (t=0.085 s); fill or cut these samples"
     )
+
+
+def test_nan_lines_as_an_editor_shows_them(tmp_path):
+    """Lines count from 1 with the header and the comment and blank lines above and between
+    the samples, as an editor numbers them; every bad column is named at once."""
+    c = lon_flight()
+    c["q"][3] = np.nan
+    c["w"][10] = np.nan
+    path = write_csv(tmp_path / "lon_0.csv", c)
+    lines = path.read_text().splitlines()
+    lines[0:0] = ["# exported by the lab's logger", ""]  # header on line 3
+    lines.insert(8, "")  # samples 0-4 on lines 4-8, a blank line 9, sample 5 on line 10
+    path.write_text("\n".join(lines) + "\n")
+    text = path.read_text().splitlines()
+    assert "nan" in text[7 - 1] and "nan" in text[15 - 1]  # samples 3 and 10
+    msg = _error(path)
+    assert msg == (f"{path}: columns 'q' (line 7), 'w' (line 15) have NaN; fill or cut these "
+                   "samples")
+
+
+def test_direct_checks_count_rows_from_0():
+    with pytest.raises(FlightDataError, match="has NaN at row 3;"):
+        check_finite("x.csv", "q", [0.0, 1.0, 2.0, np.nan])
 
 
 def test_empty_cell_is_nan(tmp_path):
     path = write_csv(tmp_path / "lon_0.csv", lon_flight())
     _edit_cell(path, 40, "w", "")
     msg = _error(path)
-    assert "column 'w' has NaN at row 40 (t=0.2 s)" in msg
+    assert "column 'w' has NaN at line 42 (t=0.2 s)" in msg
 
 
 def test_inf_and_many_rows(tmp_path):
     c = lon_flight()
     c["theta"][100:130] = np.inf
     msg = _error(write_csv(tmp_path / "lon_1.csv", c))
-    assert "column 'theta' has infinite values at rows 100, 101, 102, 103, 104 and 25 more" in msg
+    assert "column 'theta' has infinite values at lines 102, 103, 104, 105, 106 and 25 more" in msg
     assert "(t=0.5 s)" in msg
 
 
 def test_nan_in_time(tmp_path):
     c = lon_flight()
     c["t"][5] = np.nan
-    assert "column 't' has NaN at row 5;" in _error(write_csv(tmp_path / "lon_0.csv", c))
+    assert "column 't' has NaN at line 7;" in _error(write_csv(tmp_path / "lon_0.csv", c))
 
 
 def test_nan_in_extra_column_is_kept(tmp_path):
@@ -181,7 +205,7 @@ def test_time_not_increasing(tmp_path):
     c = lon_flight()
     c["t"][57] = c["t"][55]
     msg = _error(write_csv(tmp_path / "lon_0.csv", c))
-    assert "t is not strictly increasing at row 57" in msg
+    assert "t is not strictly increasing at line 59" in msg
     assert "sort the rows" in msg
 
 
@@ -189,14 +213,14 @@ def test_time_repeated(tmp_path):
     c = lon_flight()
     c["t"][57] = c["t"][56]
     msg = _error(write_csv(tmp_path / "lon_0.csv", c))
-    assert "t is not strictly increasing at row 57: t repeats 0.28 s" in msg
+    assert "t is not strictly increasing at line 59: t repeats 0.28 s" in msg
 
 
 def test_time_gap(tmp_path):
     c = {k: np.delete(v, 57) for k, v in lon_flight().items()}
     msg = _error(write_csv(tmp_path / "lon_0.csv", c))
     assert "t is not uniformly sampled" in msg
-    assert "step from row 56 to 57 (t=0.28 s) is 0.01 s" in msg
+    assert "step from line 58 to 59 (t=0.28 s) is 0.01 s" in msg
     assert "typical step is 0.005 s" in msg
     assert "resample" in msg
 
@@ -301,13 +325,13 @@ def test_nonpositive_frequency(tmp_path):
     c["f"][100:103] = 0.0
     msg = _error(write_csv(tmp_path / "lon_0.csv", c))
     assert "column 'f' (flapping frequency, Hz) must be positive" in msg
-    assert "rows 100, 101, 102 (t=0.5 s)" in msg
+    assert "lines 102, 103, 104 (t=0.5 s)" in msg
 
 
 def test_nan_frequency(tmp_path):
     c = lon_flight()
     c["f"][7] = np.nan
-    assert "column 'f' has NaN at row 7" in _error(write_csv(tmp_path / "lon_0.csv", c))
+    assert "column 'f' has NaN at line 9" in _error(write_csv(tmp_path / "lon_0.csv", c))
 
 
 def test_check_frequency_direct():

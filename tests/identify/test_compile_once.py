@@ -41,3 +41,28 @@ def test_start_compiles_once_for_flights_of_one_length(flights, caplog):
     exps = [fwid.experiment(fwid.cycle_averaged(f), model) for f in flights]
     fwid.least_squares_start(model, exps[:1])
     assert _compiles(caplog, lambda: [fwid.least_squares_start(model, [e]) for e in exps]) == []
+
+
+@pytest.fixture(scope="module")
+def other_length(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("other_length")
+    # 3.6 s: another length, in the same padded length as the 3.715 s flights above
+    write_flights(folder, n_flights=3, axis="lon", seed=6, duration=3.6)
+    return fwid.load_flights(folder)
+
+
+def test_new_length_in_a_bucket_compiles_no_estimator(flights, other_length, caplog):
+    """Flights of a new length, padded to the length of the flights before: the start, the
+    estimator and the simulation of the validation flight are not compiled again (issue 14;
+    only small programs for the data, e.g. the filters, are)."""
+    from fwid.simulate import averaged, bucket_length
+
+    def run(fl):
+        return lambda: fwid.identify(fl[:2], "lon", validate=fl[2:])
+
+    a, b = (averaged(f[0], fwid.longitudinal()).n for f in (flights, other_length))
+    assert a != b and bucket_length(a) == bucket_length(b)
+    _compiles(caplog, run(flights))
+    heavy = ("_fit_each_batched", "_start_batch", "_force_dependence", "diffeqsolve")
+    again = _compiles(caplog, run(other_length))
+    assert not [m for m in again if any(h in m for h in heavy)], again

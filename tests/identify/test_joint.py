@@ -1,6 +1,8 @@
 """Several flights through `fwid identify`: one fit per flight (batched), the joint fit, and
 the joint-vs-individual comparison on held-out flights (issue 4, items 1 and 2)."""
 
+import contextlib
+import io
 import json
 
 import numpy as np
@@ -19,11 +21,14 @@ def folder(tmp_path_factory):
 
 
 def _identify(folder, out, *extra):
+    """The report, with what the terminal showed under the key `_terminal`."""
     train = [str(folder / f"lon_{i}.csv") for i in range(3)]
     test = [str(folder / f"lon_{i}.csv") for i in (3, 4)]
-    assert main(["identify", *train, "--model", "lon", "--validate", *test, "--out", str(out),
-                 "--quiet", *extra]) == 0
-    return json.loads((out / "report.json").read_text())
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert main(["identify", *train, "--model", "lon", "--validate", *test, "--out",
+                     str(out), "--quiet", *extra]) == 0
+    return {**json.loads((out / "report.json").read_text()), "_terminal": text.getvalue()}
 
 
 @pytest.fixture(scope="module")
@@ -148,3 +153,45 @@ def test_missing_force_columns_are_said(tmp_path):
                                          r"model is fitted to the states alone"):
         ident = fwid.identify(fwid.load_flights(folder), "lon")
     assert ident.fit.converged and "M" not in ident.estimation[0].metrics
+
+
+# ------------------------------------------------------------------ the spread on the terminal
+
+
+def _rows(text: str, title: str) -> dict:
+    """The spread table under `title`: {label: [mean, std, min, max]}."""
+    lines = text[text.index(title):].splitlines()[2:]
+    rows = {}
+    for ln in lines:
+        if not ln.strip():
+            break
+        *label, a, b, c, d = ln.split()
+        rows[" ".join(label)] = [float(a), float(b), float(c), float(d)]
+    return rows
+
+
+def _check(rows: dict, spread: dict):
+    osc = spread["oscillatory"]
+    for key, label in (("wn", "wn [rad/s]"), ("zeta", "zeta")):
+        want = [osc[f"{key}_{s}"] for s in ("mean", "std", "min", "max")]
+        np.testing.assert_allclose(rows[label], want, rtol=1e-3, atol=1e-12)
+    assert osc["wn_min"] <= osc["wn_mean"] <= osc["wn_max"]
+    for j, tau in enumerate(spread["aperiodic_tau"]):
+        np.testing.assert_allclose(rows[f"tau {j + 1} [s]"],
+                                   [tau[s] for s in ("mean", "std", "min", "max")], rtol=1e-3)
+
+
+def test_spread_of_individual_fits_printed(each):
+    """Several flights fitted one by one: the terminal shows the modes' spread, with the
+    numbers of report.json (issue 15)."""
+    spread = each["modes_spread"]
+    assert spread["flights"] == 3
+    _check(_rows(each["_terminal"], "mode spread over 3 flights (each fitted alone):"), spread)
+
+
+def test_spread_with_joint_and_validate_printed(joint):
+    """--joint --validate: the individual fits' spread beside the joint model's modes."""
+    report = joint[0]
+    spread = report["joint_vs_individual"]["modes"]["individual_spread"]
+    _check(_rows(report["_terminal"], "mode spread over the 3 training flights, each fitted "
+                 "alone"), spread)

@@ -86,9 +86,18 @@ def test_time_and_spectrum_figure(tmp_path):
     assert isinstance(fig, Figure)
     assert (tmp_path / "fig12.png").stat().st_size > 10_000
     axes = fig.get_axes()
-    assert len(axes) == 6  # X, Z and M: time and spectrum each
-    spec = axes[1]
+    assert len(axes) == 9  # X, Z and M: time, zoom and spectrum each
+    full, zoom, spec = axes[:3]
     assert spec.get_xscale() == "log"
+    # the zoom shows 4 flapping cycles in the middle of the record; the full trace shades them
+    lo, hi = zoom.get_xlim()
+    assert hi - lo == pytest.approx(4 / 12.5) and lo + hi == pytest.approx(599 * DT)
+    assert zoom.get_lines()[0].get_xdata().size == pytest.approx(4 / 12.5 / DT, abs=2)
+    assert len(full.patches) == 1
+    assert zoom.get_title().startswith("RMS ") and " N (" in zoom.get_title()
+    # units on the spectra: the force's unit on the amplitude, Hz on the frequency
+    assert [a.get_ylabel() for a in axes[2::3]] == ["|X| [N]", "|Z| [N]", "|M| [N m]"]
+    assert axes[-1].get_xlabel() == "f [Hz]"
     # the harmonic marks are at n f
     marks = sorted(line.get_xdata()[0] for line in spec.get_lines() if line.get_linestyle() == ":")
     np.testing.assert_allclose(marks, [12.5, 25.0, 37.5])
@@ -107,6 +116,7 @@ def test_superposition_and_steady_figures(tmp_path):
     ff = _flight_fit()
     fig = plot_steady_vs_manoeuvre(ff, ff, f=12.5, path=tmp_path / "fig14.png")
     assert len(fig.get_axes()) == 4 and (tmp_path / "fig14.png").exists()
+    assert fig.get_axes()[0].get_ylabel() == "|X| [N]"
 
 
 def test_peak_table():

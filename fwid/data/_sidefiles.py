@@ -1,0 +1,121 @@
+"""The JSON files beside a flight's CSV, read without JAX: `vehicle.json` (mass and
+inertia) and the sidecar `NAME.json` (trim values, first input), CONTRACTS section 1."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+from .._errors import FlightDataError
+
+PathLike = str | os.PathLike
+
+VEHICLE_FILE = "vehicle.json"
+
+_VEHICLE_KEYS = ("mass", "Ix", "Iy", "Iz", "Ixz", "g")
+_VEHICLE_DEFAULTS = {"Ixz": 0.0, "g": 9.81}
+_VEHICLE_SHAPE = '{"mass": kg, "Ix": kg m^2, "Iy": .., "Iz": .., "Ixz": .., "g": 9.81}'
+
+
+def _read_json(path: Path, what: str) -> object:
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except OSError as e:
+        raise FlightDataError(f"{path}: cannot read {what} ({e.strerror or e})") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as e:
+        raise FlightDataError(
+            f"{path}: not valid JSON ({e.msg} at line {e.lineno}, column {e.colno}); "
+            f"fix the {what}"
+        ) from None
+
+
+def _number(value) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def read_vehicle(path: PathLike) -> dict[str, float]:
+    """Read the mass and inertia of the vehicle from `vehicle.json`, as floats by key (no
+    JAX: [`fwid.data.load_vehicle`][] makes the `Vehicle` of them).
+
+    The file holds `{"mass": kg, "Ix": kg m^2, "Iy": .., "Iz": .., "Ixz": .., "g": 9.81}`;
+    `Ixz` defaults to 0 and `g` to 9.81 m/s^2. Other keys are ignored.
+
+    **Arguments:**
+    - `path`: the `vehicle.json` file.
+
+    **Returns:** `{"mass": .., "Ix": .., "Iy": .., "Iz": .., "Ixz": .., "g": ..}`.
+
+    Raises a [`fwid.FlightDataError`][] naming the file and the key when a key is missing,
+    not a finite number, or out of range (mass, `Ix`, `Iy`, `Iz` and `g` must be positive).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FlightDataError(f"{path}: no such file; write {_VEHICLE_SHAPE} there")
+    data = _read_json(path, "vehicle file")
+    if not isinstance(data, dict):
+        raise FlightDataError(f"{path}: expected a JSON object {_VEHICLE_SHAPE}")
+    values = {}
+    for key in _VEHICLE_KEYS:
+        if key not in data:
+            if key in _VEHICLE_DEFAULTS:
+                values[key] = _VEHICLE_DEFAULTS[key]
+                continue
+            close = [k for k in data if isinstance(k, str) and k.lower() == key.lower()]
+            fix = (
+                f"rename '{close[0]}' to '{key}'"
+                if close
+                else f"add it (expected {_VEHICLE_SHAPE})"
+            )
+            raise FlightDataError(f"{path}: missing key '{key}'; {fix}")
+        value = _number(data[key])
+        if value is None:
+            raise FlightDataError(
+                f"{path}: key '{key}' must be a finite number, got {data[key]!r}"
+            )
+        if key != "Ixz" and value <= 0:
+            unit = {"mass": "kg", "g": "m/s^2"}.get(key, "kg m^2")
+            raise FlightDataError(
+                f"{path}: key '{key}' must be positive, got {value:g}; give it in {unit}"
+            )
+        values[key] = value
+    return values
+
+
+def read_sidecar(path: Path) -> tuple[dict[str, float], int | None]:
+    """The trim values and first-input index given by the sidecar `NAME.json`, if any."""
+    side = path.with_suffix(".json")
+    if side.name == VEHICLE_FILE or not side.is_file():
+        return {}, None
+    data = _read_json(side, "sidecar")
+    if not isinstance(data, dict):
+        raise FlightDataError(f'{side}: expected a JSON object such as {{"trim": {{"u0": ..}}}}')
+    trim_in = data.get("trim", {})
+    if not isinstance(trim_in, dict):
+        raise FlightDataError(
+            f'{side}: "trim" must be an object such as {{"u0": .., "w0": .., "theta0": ..}}'
+        )
+    trim = {}
+    for key, value in trim_in.items():
+        if not (isinstance(key, str) and len(key) > 1 and key.endswith("0")):
+            raise FlightDataError(
+                f"{side}: trim key {key!r} is not '<column>0' (e.g. 'u0', 'theta0'); rename it"
+            )
+        v = _number(value)
+        if v is None:
+            raise FlightDataError(
+                f"{side}: trim value '{key}' must be a finite number, got {value!r}"
+            )
+        trim[key] = v
+    first = data.get("first_input")
+    if first is not None and (isinstance(first, bool) or not isinstance(first, int) or first < 0):
+        raise FlightDataError(
+            f"{side}: 'first_input' must be a sample index (an integer >= 0), got {first!r}"
+        )
+    return trim, first
