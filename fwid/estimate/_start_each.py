@@ -22,7 +22,7 @@ import numpy as np
 from ..models._greybox import GreyBoxModel
 from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments
-from ._start import _derivative
+from ._regression import derivative as _derivative
 from ._start_outputs import nominal_start
 
 #: Gauss-Newton steps per regression, as in `least_squares_start`.
