@@ -15,15 +15,7 @@ def diagnose(args) -> int:
     check_paths(args.train, args.test)
     train, test = read_sets(args.train, args.test, require=DIAGNOSE_COLUMNS[args.axis])
     import fwid  # JAX from here on: every file has been read and checked
-    from fwid.report import (
-        diagnosis_summary,
-        identification_report,
-        parameters_csv,
-        plot_gap_map,
-        plot_gap_sim,
-        write_json,
-        write_text,
-    )
+    from fwid.report import diagnosis_summary, write_diagnosis
 
     train, test = fwid.data.build_flights(train), fwid.data.build_flights(test)
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
@@ -32,18 +24,7 @@ def diagnose(args) -> int:
     print(diagnosis_summary(diag))
     if args.out:
         out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        plot_gap_map(diag, path=out / "gap_map.png")
-        written = ["diagnosis.json", "gap_map.png"]
-        if diag.models is not None:
-            plot_gap_sim(diag, path=out / "gap_sim.png")
-            written.append("gap_sim.png")
-            if diag.models.augmented is not None:  # the model to carry on with
-                rep = identification_report(diag.models.augmented)
-                write_json(out / "augmented_model.json", rep)
-                write_text(out / "augmented_parameters.csv", parameters_csv(rep["parameters"]))
-                written += ["augmented_model.json", "augmented_parameters.csv"]
-        write_json(out / "diagnosis.json", diag.to_json())
+        written = write_diagnosis(diag, out)
         print(f"\nfwid: {', '.join(written)} in {out}/ ({time.perf_counter() - t0:.1f} s)")
     else:
         print("\nfwid: nothing written (give --out DIR for diagnosis.json and the gap map)")

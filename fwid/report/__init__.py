@@ -18,6 +18,7 @@ from ._diagnosis import (
     diagnosis_summary as diagnosis_summary,
     plot_gap_map as plot_gap_map,
     plot_gap_sim as plot_gap_sim,
+    write_diagnosis as write_diagnosis,
 )
 from ._figures import plot_flight_fit as plot_flight_fit, plot_poles as plot_poles
 from ._overview import plot_fits_overview as plot_fits_overview

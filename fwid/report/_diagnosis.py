@@ -210,3 +210,27 @@ def plot_gap_sim(d: Diagnosis, path: str | Path | None = None, flight: int = 0) 
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig
+
+
+def write_diagnosis(d: Diagnosis, out: str | Path) -> list[str]:
+    """Write what `fwid diagnose --out` writes into `out`: `diagnosis.json` (last, once the
+    rest is written), `gap_map.png`, and with a simulation block `gap_sim.png` and the model
+    with the diagnosed effect to carry on with (`augmented_model.json`, a `report.json` of
+    its own, and `augmented_parameters.csv`). Returns the file names written."""
+    from ._identification import identification_report
+    from ._json import parameters_csv, write_json, write_text
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    plot_gap_map(d, path=out / "gap_map.png")
+    written = ["diagnosis.json", "gap_map.png"]
+    if d.models is not None:
+        plot_gap_sim(d, path=out / "gap_sim.png")
+        written.append("gap_sim.png")
+        if d.models.augmented is not None:
+            rep = identification_report(d.models.augmented)
+            write_json(out / "augmented_model.json", rep)
+            write_text(out / "augmented_parameters.csv", parameters_csv(rep["parameters"]))
+            written += ["augmented_model.json", "augmented_parameters.csv"]
+    write_json(out / "diagnosis.json", d.to_json())
+    return written

@@ -53,6 +53,13 @@ class StateSpace:
         return control.ss(self.A, self.B, self.C, self.D, states=list(self.states),
                           inputs=list(self.inputs), outputs=list(self.outputs))
 
+    @classmethod
+    def from_json(cls, d: dict) -> "StateSpace":
+        """The system `to_json` wrote (e.g. `report.json["state_space"]` of `fwid identify`),
+        without fitting again."""
+        return cls(*(np.asarray(d[k], dtype=float) for k in "ABCD"),
+                   *(tuple(d[k]) for k in ("states", "inputs", "outputs")))
+
     def to_json(self) -> dict:
         return {"A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(),
                 "D": self.D.tolist(), "states": list(self.states), "inputs": list(self.inputs),

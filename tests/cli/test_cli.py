@@ -148,7 +148,7 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
                      "--effect", "nonlinear-aero", "--strength", "1.5"]) == 0
     capsys.readouterr()
     assert main(["diagnose", "--train", str(train), "--test", str(test), "--out", str(out),
-                 "--quiet"]) == 0
+                 "--quiet", "--no-simulation"]) == 0
     text = capsys.readouterr().out
     assert "VERDICT: nonlinear-aero" in text
     rep = json.loads((out / "diagnosis.json").read_text())
@@ -158,6 +158,7 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
     assert set(top["test_rms_before"]) == {"X", "Y", "Z", "L", "M", "N"}
     assert rep["localisation"]["by_output"]
     assert (out / "gap_map.png").stat().st_size > 10_000
+    assert rep["simulation"] is None and not (out / "gap_sim.png").exists()
     # bad input: exit 2, one line, the earlier report untouched
     before = (out / "diagnosis.json").read_text()
     (tmp_path / "bad").mkdir()

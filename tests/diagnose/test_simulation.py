@@ -1,6 +1,8 @@
 """The gap in the simulated states: the diagnosed effect put into the EOM (`_augment.py`),
 re-fitted by output error on the training flights, simulated on the test flights."""
 
+import json
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -10,7 +12,7 @@ from fwid.diagnose._augment import augment
 from fwid.diagnose._simulation import simulation_gap
 
 
-def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights):
+def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights, tmp_path):
     """4 + 4 flights with an actuator lag: the diagnosis names it, and with its lag state in
     the EOM the test flights' simulated states are at least 20 % closer to the measured ones;
     the augmented model is returned with standard deviations."""
@@ -28,6 +30,17 @@ def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights):
     table = aug.fits[0].table()
     assert all(np.isfinite(table[k]["std"]) and table[k]["std"] > 0 for k in ("Mde", "Zde"))
     assert d.to_json()["simulation"]["shrink_pct"] == sim["shrink_pct"]
+    # what `fwid diagnose --out` writes: the figures and the model to carry on with
+    from fwid.report import write_diagnosis
+
+    written = write_diagnosis(d, tmp_path)
+    assert set(written) == {"diagnosis.json", "gap_map.png", "gap_sim.png",
+                            "augmented_model.json", "augmented_parameters.csv"}
+    rep = json.loads((tmp_path / "augmented_model.json").read_text())
+    assert rep["model"] == "lon+actuator-dynamics" and rep["parameters"]["Mde"]["std"] > 0
+    assert "Mde," in (tmp_path / "augmented_parameters.csv").read_text()
+    assert json.loads((tmp_path / "diagnosis.json").read_text())["simulation"]["effects"] == [
+        "actuator-dynamics"]
 
 
 def test_no_shrink_from_an_effect_that_is_not_there(effect_flights):

@@ -66,3 +66,15 @@ def test_output_equation_is_linearised():
     np.testing.assert_allclose(ss.C, [[1, 0], [0, 3]])
     np.testing.assert_allclose(ss.D, [[0], [2]])
     assert ss.outputs == ("a", "acc") and "poles" in repr(ss)
+
+
+def test_from_json_restores_the_system_without_fitting():
+    """`report.json["state_space"]` back into a `StateSpace`: the same matrices and names."""
+    import json
+
+    ss = fwid.StateSpace(np.array([[-1.0, 2.0], [0.0, -3.0]]), np.array([[1.0], [0.5]]),
+                         np.eye(2), np.zeros((2, 1)), ("q", "w"), ("de",), ("q", "w"))
+    back = fwid.StateSpace.from_json(json.loads(json.dumps(ss.to_json())))
+    for k in "ABCD":
+        np.testing.assert_array_equal(getattr(back, k), getattr(ss, k))
+    assert (back.states, back.inputs, back.outputs) == (ss.states, ss.inputs, ss.outputs)
