@@ -26,3 +26,22 @@ def test_bad_prefix_exits_2_and_writes_nothing(tmp_path, capsys, bad):
     assert info.value.code == 2
     assert "prefix" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_simulate_form_is_passed_on_and_checked(tmp_path, capsys):
+    """`--form` picks the effect's form (written in the sidecar's truth); a form the effect
+    does not have exits 2 with the choices, and writes nothing."""
+    import json
+
+    from fwid.cli import main
+
+    assert main(["simulate", str(tmp_path / "a"), "--flights", "1", "--duration", "1.5",
+                 "--effect", "actuator-dynamics", "--form", "delay"]) == 0
+    truth = json.loads((tmp_path / "a" / "lon_0.json").read_text())["truth"]
+    assert "delay" in json.dumps(truth)
+    capsys.readouterr()
+    assert main(["simulate", str(tmp_path / "b"), "--effect", "actuator-dynamics",
+                 "--form", "wobble"]) == 2
+    err = capsys.readouterr().err
+    assert "wobble" in err and "rate-limit" in err
+    assert not (tmp_path / "b").exists()
