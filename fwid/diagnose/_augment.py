@@ -31,11 +31,11 @@ from ..data import Flight
 from ..identify import get_model
 from ..models import GreyBoxModel
 from ._catalogue import lagged
+from ._probes import ATTITUDE
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
 IN_EOM = ("actuator-dynamics", "input-lead", "lon-lat-coupling", "nonlinear-aero", "attitude")
-ATTITUDE = {"lon": "theta", "lat": "phi"}
 
 
 def _quadratic_terms(axis: str) -> list[tuple[str, Callable]]:

@@ -24,17 +24,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._catalogue import Effect, axis_of, lagged
-from ._signals import AXIS_INPUT, Signals
+from ._catalogue import Effect, _slow, axis_of, lagged
+from ._signals import AXIS_INPUT
 
 #: Leads [s] tried by `input-lead`.
 PROBE_LEADS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
 #: The attitude angle of each axis.
 ATTITUDE = {"lon": "theta", "lat": "phi"}
-
-
-def _slow(s: Signals, name: str) -> np.ndarray:
-    return s.slow.get(name, np.zeros(s.n))
 
 
 def _input_lead(s, load, tau, h, dh):
