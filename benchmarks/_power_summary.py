@@ -13,8 +13,8 @@ from pathlib import Path
 NOT_NAMED = ("none", "unexplained", "random-disturbance")
 #: The verdict each out-of-catalogue effect should get (issue 16: deterministic structure is
 #: `unexplained`, gusts a `random-disturbance`).
-OUT_VERDICT = {"turbulence": "random-disturbance", "unsteady-aero": "unexplained",
-               "sensor-offset": "unexplained"}
+OUT_VERDICT = {"turbulence": "random-disturbance", "cg-offset": "unexplained",
+               "battery-sag": "unexplained"}
 
 
 def right(r: dict) -> bool | None:

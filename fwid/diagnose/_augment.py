@@ -4,10 +4,16 @@ measured where a user sees it, in the simulated states.
 
 Each effect of the verdict becomes terms of the cycle-averaged model:
 
-- `actuator-dynamics` (and the probe `input-lead`): the acting deflection, the measured one
-  through the diagnosed lag or delay (a lead for the probe), replaces it as the model's input
+- `actuator-dynamics` and `time-offset`: the acting deflection, the measured one through the
+  diagnosed lag or delay (a lead for `time-offset`), replaces it as the model's input
   (`d_eff`, a prepared column; the time constant is the diagnosis's, the control derivative
   is re-estimated);
+- `unsteady-aero`: the lagging part `lag(x) - x` of the axis's measured states (the
+  diagnosed time constant; prepared columns `u_lag`, ...) as extra inputs, with a derivative
+  per own load (`Mw_lag`, ...: Eqs. 1-6 with a lagging share);
+- `flap-frequency`: the measured flapping frequency's deviation from its median, and its
+  square, as extra inputs with a derivative per own load (`Xf`, `Xff`, ...); the frequency
+  lag, when one was diagnosed, is applied to the prepared column;
 - `lon-lat-coupling`: the other axis's measured states and control as extra inputs, with a
   derivative per own load (`Xv`, `Mdr`, `Lq`, ...: Eqs. 1-6 with the cross terms);
 - `nonlinear-aero`: the quadratic terms of `_catalogue.py` in the *simulated* states, with a
@@ -35,7 +41,8 @@ from ._probes import ATTITUDE
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
-IN_EOM = ("actuator-dynamics", "input-lead", "lon-lat-coupling", "nonlinear-aero", "attitude")
+IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
+          "lon-lat-coupling", "nonlinear-aero", "attitude")
 
 
 def _quadratic_terms(axis: str) -> list[tuple[str, Callable]]:
@@ -63,6 +70,19 @@ def _load_rates(axis: str, dF, c):
                       0.0 * dY])
 
 
+def _lagging(flight: Flight, state: str, tau: float) -> np.ndarray:
+    """The lagging part `lag(x) - x` of the measured `state` (first-order lag `tau`)."""
+    x = np.asarray(flight[state], dtype=float)
+    return lagged(x, flight.dt, "lag", tau) - x
+
+
+def _frequency(flight: Flight, tau: float) -> np.ndarray:
+    """The measured flapping frequency minus its median, through a lag `tau` (0: none)."""
+    f = np.asarray(flight["f"], dtype=float)
+    df = f - np.median(f)
+    return lagged(df, flight.dt, "lag", tau) if tau else df
+
+
 def augment(axis: str, effects: Sequence[tuple[str, object]]
             ) -> tuple[GreyBoxModel, Callable[[Flight], Flight], list[str]]:
     """The `axis` model (`fwid.longitudinal`/`fwid.lateral`) with `effects` (`(name,
@@ -80,16 +100,30 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
     extra_inputs: list[str] = []
     terms: list[tuple[str, Callable]] = []  # (suffix, g(x, u_extra)) per own load
     left_out = []
+    columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
+
+    def add_input(name, column):
+        j = len(extra_inputs)
+        extra_inputs.append(name)
+        if column is not None:
+            columns[name] = column
+        terms.append((name, lambda x, ue, j=j: ue[j]))
+
     for name, variant in effects:
-        if name in ("actuator-dynamics", "input-lead"):
+        if name in ("actuator-dynamics", "time-offset"):
             shift = variant if name == "actuator-dynamics" else ("delay", -float(variant))
             control = f"{ctrl}_eff"
+        elif name == "unsteady-aero":
+            for s in AXIS_STATES[axis]:
+                add_input(f"{s}_lag", lambda fl, s=s, tau=float(variant): _lagging(fl, s, tau))
+        elif name == "flap-frequency":
+            tau = float(variant or 0.0)
+            add_input("f_dev", lambda fl, tau=tau: _frequency(fl, tau))
+            add_input("f_dev2", lambda fl, tau=tau: _frequency(fl, tau) ** 2)
         elif name == "lon-lat-coupling":
             o = other(axis)
-            for k, s in enumerate(AXIS_STATES[o] + (AXIS_INPUT[o],)):
-                j = len(extra_inputs)
-                extra_inputs.append(s)
-                terms.append((s, lambda x, ue, j=j: ue[j]))
+            for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
+                add_input(s, None)
         elif name == "nonlinear-aero":
             xs_idx = [state_index[s] for s in AXIS_STATES[axis]]
             for suffix, g in _quadratic_terms(axis):
@@ -122,10 +156,11 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
     )
 
     def prepare(flight: Flight) -> Flight:
-        if shift is None:
-            return flight
-        d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
-        kind, tau = shift
-        return flight.with_columns(**{control: lagged(d, flight.dt, kind, tau)})
+        new = {k: g(flight) for k, g in columns.items()}
+        if shift is not None:
+            d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
+            kind, tau = shift
+            new[control] = lagged(d, flight.dt, kind, tau)
+        return flight.with_columns(**new) if new else flight
 
     return model, prepare, left_out

@@ -17,6 +17,23 @@ is the generic first term of its physical family.
   or a pure delay: `d_eff` replaces `d` in the load's own model (no new coefficient, the
   control derivative acts on `d_eff`), with the time constant chosen from `LAGS` by the
   training fit. One free number only, so it cannot soak up unrelated misfit.
+- `unsteady-aero`: part of the state-dependent loads follows the states late (a lagging
+  wake, Wagner/Kuessner-like): the lagging part `lag(x) - x` of the axis's states through a
+  first-order lag of time constant from `LAGS`, one coefficient per state. A load is never
+  given the lag of the state it is reconstructed from (X: u, Z: w, M: q, Y: v, L and N: p,
+  r): `lag(x) - x` is about `-tau x'`, and the noise of `x'` is the load's own noise
+  (Section III), so such a column would "explain" measurement noise. The other states carry
+  the effect (M through w and u, Z through q and u, ...). Those rates also carry what a gust
+  does to the other loads, so when the residual stays red after it (`_disturbance.py`) it was
+  a proxy of a disturbance and the verdict is `random-disturbance`.
+- `time-offset`: the logged deflection is late against the states (a clock offset between the
+  logs; `actuator-dynamics` covers the deflection acting *after* it is logged, which a
+  time offset of the other sign cannot be told from): the deflection shifted earlier by a lead
+  from `LEADS` replaces the measured one, like `actuator-dynamics`.
+- `flap-frequency`: the cycle-averaged loads follow the slow variation of the flapping
+  frequency `f` (thrust grows with it), which Eqs. (1-6) leave out: `df` and `df^2` (`df`
+  the cycle-averaged `f` minus its flight median), at once or through a first-order lag from
+  `FREQUENCY_LAGS`.
 """
 
 from __future__ import annotations
@@ -29,8 +46,15 @@ from scipy.signal import lfilter, lfilter_zi
 
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, Signals, other
 
-#: Time constants / delays [s] tried by `actuator-dynamics`.
+#: Time constants / delays [s] tried by `actuator-dynamics` and `unsteady-aero`.
 LAGS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2)
+#: Leads [s] tried by `time-offset`.
+LEADS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
+#: Time constants [s] tried by `flap-frequency` (0: none).
+FREQUENCY_LAGS = (0.0, 0.1, 0.2, 0.4)
+#: The states each load is reconstructed from (their rates are in it, Section III).
+OWN_STATES = {"X": ("u",), "Z": ("w",), "M": ("q",), "Y": ("v",), "L": ("p", "r"),
+              "N": ("p", "r")}
 
 
 def axis_of(load: str) -> str:
@@ -91,6 +115,28 @@ def _actuator(s, load, variant, h, dh):
     return lagged(d, s.dt, kind, tau)[:, None]
 
 
+def unsteady_states(load: str) -> tuple[str, ...]:
+    """The states whose lagging part `unsteady-aero` gives `load` (not its own)."""
+    return tuple(x for x in AXIS_STATES[axis_of(load)] if x not in OWN_STATES[load])
+
+
+def _unsteady(s, load, tau, h, dh):
+    xs = [_slow(s, x) for x in unsteady_states(load)]
+    return np.stack([lagged(x, s.dt, "lag", tau) - x for x in xs], axis=1)
+
+
+def _time_offset(s, load, lead, h, dh):
+    d = _slow(s, AXIS_INPUT[axis_of(load)])
+    return lagged(d, s.dt, "delay", -lead)[:, None]
+
+
+def _flap_frequency(s, load, tau, h, dh):
+    df = _slow(s, "f") - np.median(_slow(s, "f"))
+    if tau:
+        df = lagged(df, s.dt, "lag", tau)
+    return np.stack([df, df * df], axis=1)
+
+
 @dataclasses.dataclass(frozen=True)
 class Effect:
     """One candidate effect: `columns(signals, load, variant, h, dh)` returns the regressors
@@ -107,6 +153,9 @@ class Effect:
     variants: tuple = (None,)
     replaces_input: bool = False
     labels: Callable | None = dataclasses.field(default=None, repr=False, compare=False)
+    #: Its columns carry states' rates, which integrate what an unmeasured disturbance does
+    #: to the other loads: it may be a proxy of gusts (`_diagnose.py` checks the colour).
+    rates: bool = False
 
 
 CATALOGUE: tuple[Effect, ...] = (
@@ -135,6 +184,32 @@ CATALOGUE: tuple[Effect, ...] = (
         _actuator,
         tuple(("lag", t) for t in LAGS) + tuple(("delay", t) for t in LAGS),
         replaces_input=True,
+    ),
+    Effect(
+        "unsteady-aero",
+        "part of the state-dependent loads lags the states (a lagging wake)",
+        "averaged",
+        _unsteady,
+        LAGS,
+        labels=unsteady_states,
+        rates=True,
+    ),
+    Effect(
+        "time-offset",
+        "the logged deflection is late against the states (the response leads it)",
+        "averaged",
+        _time_offset,
+        LEADS,
+        replaces_input=True,
+        labels=lambda load: (AXIS_INPUT[axis_of(load)],),
+    ),
+    Effect(
+        "flap-frequency",
+        "the cycle-averaged loads follow the flapping frequency",
+        "averaged",
+        _flap_frequency,
+        FREQUENCY_LAGS,
+        labels=lambda load: ("f", "f"),
     ),
 )
 

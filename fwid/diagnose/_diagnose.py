@@ -177,7 +177,7 @@ def diagnose(
        of the RMS of the affected loads (each relative to its baseline RMS).
     3. **Where**: the gap map of the baseline on the test flights (`gap_map`).
 
-    The probes (`_probes.py`: a leading deflection, attitude, drift, flapping frequency) take
+    The probes (`_probes.py`: the attitude, a drift over the flight) take
     part in the selection as rivals: when one enters first, the gap is
     predictable from what was measured but no catalogue entry explains it, and the verdict is
     `"unexplained"` (with the probe's `drivers`), never the catalogue entry that merely
@@ -186,7 +186,9 @@ def diagnose(
     4. **Nothing named**: the colour of the held-out residual (`_disturbance.py`) tells a
        disturbance nothing measured predicts (`"random-disturbance"`: red, as gusts make it)
        from measurement noise (`"none"`: the model is adequate, up to the detection limit).
-       A probe that leaves the residual red was a proxy of a disturbance, not structure.
+       A probe that leaves the residual red was a proxy of a disturbance, not structure; so
+       was a catalogue entry built on states' rates (`unsteady-aero`), selected first, that
+       leaves it red (`disturbance["proxy"]` says which; `effects` is then empty).
 
     `verdict` is the first effect selected, `"unexplained"`, `"random-disturbance"`, or
     `"none"`. Each candidate carries its p value,
@@ -330,6 +332,8 @@ def diagnose(
                "shrink_pct": shrink(prev, now, affected),
                "test_rms_before": prev, "test_rms_after": now}
         prev = now
+        if e.rates and not effects and unexplained is None:
+            row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
         if e.name in named and unexplained is None:
             effects.append(row)
             in_sim.append((e.name, model[-1][1]))
@@ -348,8 +352,15 @@ def diagnose(
     # a probe that leaves the residual as red as a disturbance found a proxy of it (a state
     # that integrates the disturbance), not structure; nothing at all found and a red
     # residual: a disturbance nothing measured predicts
+    proxy = None
     if verdict == "unexplained" and unexplained["redness_after"] >= RED_MIN:
         verdict = "random-disturbance"
+    elif effects and effects[0].get("redness_after", 0.0) >= RED_MIN:
+        # an entry built on states' rates that leaves the residual red tracked a disturbance
+        proxy, effects, in_sim = effects[0], [], []
+        verdict = "random-disturbance"
+        disturbance["proxy"] = {k: proxy[k] for k in ("effect", "variant", "p", "shrink_pct",
+                                                       "redness_after")}
     elif verdict == "none" and disturbance["redness"] >= RED_MIN:
         verdict = "random-disturbance"
     if verdict == "unexplained":

@@ -5,15 +5,16 @@ these. Each probe is a generic, low-order family of regressors of the cycle-aver
 fitted and tested exactly like a catalogue effect (the cross-fit of `_significance.py`, in the
 same forward selection). When a probe is the first to enter, the residual is predictable from
 what was measured but no catalogue entry explains it: the verdict is `"unexplained"`, with the
-signals the probe leans on (`drivers`). Without them, an effect outside the catalogue (a
-lagging wake, a clock offset between the logs) is named after whichever catalogue entry it
-happens to correlate with, which is the wrong answer looking like a right one.
+signals the probe leans on (`drivers`). Without them, an effect outside the catalogue (the
+weight's moment of an offset centre of gravity, a battery draining) is named after whichever
+catalogue entry it happens to correlate with, which is the wrong answer looking like a right
+one.
 
-- `input-lead`: the axis's deflection acts *before* it is logged (a time offset between the
-  logs; the catalogue's `actuator-dynamics` covers only the deflection acting after).
 - `attitude`: the load follows the attitude angle (theta or phi), which Eqs. (2-6) leave out.
 - `drift`: a trend over the flight common to all flights (battery sag, temperature).
-- `flap-frequency`: the load follows the slow variation of the flapping frequency.
+
+(The leading deflection and the flapping frequency were probes until issue 16 made them the
+catalogue's `time-offset` and `flap-frequency`.)
 
 No probe may contain the states' rates, or filtered states (a lagged state is the state minus
 its rate times the lag): the loads are reconstructed from those rates (Section III), so such a
@@ -24,18 +25,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._catalogue import Effect, _slow, axis_of, lagged
-from ._signals import AXIS_INPUT
+from ._catalogue import Effect, _slow, axis_of
 
-#: Leads [s] tried by `input-lead`.
-PROBE_LEADS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
 #: The attitude angle of each axis.
 ATTITUDE = {"lon": "theta", "lat": "phi"}
-
-
-def _input_lead(s, load, tau, h, dh):
-    d = _slow(s, AXIS_INPUT[axis_of(load)])
-    return lagged(d, s.dt, "delay", -tau)[:, None]
 
 
 def _attitude(s, load, variant, h, dh):
@@ -47,20 +40,11 @@ def _drift(s, load, variant, h, dh):
     return np.stack([t, t * t], axis=1)
 
 
-def _flap_frequency(s, load, variant, h, dh):
-    return _slow(s, "f")[:, None]
-
-
 PROBES: tuple[Effect, ...] = (
-    Effect("input-lead", "the deflection acts before it is logged (a time offset)",
-           "averaged", _input_lead, PROBE_LEADS, replaces_input=True,
-           labels=lambda load: (AXIS_INPUT[axis_of(load)],)),
     Effect("attitude", "loads follow the attitude angle", "averaged", _attitude,
            labels=lambda load: (ATTITUDE[axis_of(load)],)),
     Effect("drift", "a trend over the flight common to all flights", "averaged", _drift,
            labels=lambda load: ("time", "time")),
-    Effect("flap-frequency", "loads follow the flapping frequency", "averaged",
-           _flap_frequency, labels=lambda load: ("f",)),
 )
 
 #: Names of the probes.

@@ -7,6 +7,11 @@ the round stays at `alpha`) and its typical held-out gain reaches `min_gain`; of
 pass, the one with the largest held-out gain is added. Selection stops when none passes. Once
 an effect is in, a correlated candidate that only echoed it loses its gain, so it is not named
 twice; a second, different effect keeps its own and is added next.
+
+An entry built on states' rates (`Effect.rates`: `unsteady-aero`) may only enter first: the
+rate of one state carries the load of its own axis (`w' = Z / m + ...`), so once another
+effect is in, such an entry would pick up that effect's leftover misfit on the other loads
+and be named as a second effect that is not there.
 """
 
 from __future__ import annotations
@@ -48,6 +53,10 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
     remaining = list(catalogue)
     chosen, last, level, first = [], {}, {}, {}
     while remaining and len(chosen) < max_effects:
+        if chosen:
+            remaining = [e for e in remaining if not e.rates]
+            if not remaining:
+                break
         lv = alpha / len(remaining)
         ev = {e.name: evidence(engine, halves, models, e) for e in remaining}
         last.update(ev)

@@ -158,7 +158,8 @@ def flapping_harmonics(phase, vehicle: DelFly = DELFLY) -> tuple[np.ndarray, np.
     return s * c[:, 0] + co * c[:, 1], co * c[:, 0] - s * c[:, 1]
 
 
-def _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0, xo0, flapping):
+def _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0, xo0, flapping,
+               E_int=None, E_mid=None):
     """Fixed-step RK4 over the internal grid `t_int` (step h) of the cycle-averaged states
     `xc` and, with `flapping`, the flapping response `xo` (superposition, exact for the
     linear model: `x = xc + xo`):
@@ -166,6 +167,9 @@ def _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0, x
         xc' = A xc + B u_eff + G extra(xc, u_eff, aux)         (Eqs. 7-9, 1-6 + effect)
         xo' = A xo + G flap(xc, u_eff, F_TV(phi_f(t)))         (Eq. 12 loads in Eqs. 7-9)
         aux' = effect's auxiliary dynamics (actuator, lagged states), u_eff = act(u, aux)
+
+    (`extra` includes the effect's `timed_loads`, given on the grid and at the step midpoints
+    as `E_int`/`E_mid`, or `None`.)
 
     Effects act on the cycle-averaged states (`active`: the effect's forms, `_effects`).
     `u_int` (N+1, 2): commanded input on the grid (linear between samples, so midpoints are
@@ -180,13 +184,15 @@ def _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0, x
     ia = 18 if flapping else 9
     nz = ia + na
 
-    def rhs(z, u_cmd, F, H):
+    def rhs(z, u_cmd, F, H, E):
         xc = z[:9]
         aux = z[ia:]
         u = active.actuator(u_cmd, aux) if na else u_cmd
         dxc = A @ xc + B @ u
         if ext:
             dxc = dxc + G @ active.extra_loads(xc, u, aux)
+        if E is not None:
+            dxc = dxc + G @ E
         parts = [dxc]
         if flapping:
             Fg = active.flapping(xc, u, F, *H) if flap else F
@@ -211,10 +217,12 @@ def _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0, x
         Hj = (H_int[0][j], H_int[1][j]) if H_int is not None else none2
         Hm = (H_mid[0][j], H_mid[1][j]) if H_mid is not None else none2
         Hk = (H_int[0][j + 1], H_int[1][j + 1]) if H_int is not None else none2
-        k1 = rhs(z, u_int[j], F_int[j], Hj)
-        k2 = rhs(z + 0.5 * h * k1, um, F_mid[j], Hm)
-        k3 = rhs(z + 0.5 * h * k2, um, F_mid[j], Hm)
-        k4 = rhs(z + h * k3, u_int[j + 1], F_int[j + 1], Hk)
+        Ej, Em, Ek = ((E_int[j], E_mid[j], E_int[j + 1]) if E_int is not None
+                      else (None, None, None))
+        k1 = rhs(z, u_int[j], F_int[j], Hj, Ej)
+        k2 = rhs(z + 0.5 * h * k1, um, F_mid[j], Hm, Em)
+        k3 = rhs(z + 0.5 * h * k2, um, F_mid[j], Hm, Em)
+        k4 = rhs(z + h * k3, u_int[j + 1], F_int[j + 1], Hk, Ek)
         z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         Z[j + 1] = z
     xc = Z[:, :9]
@@ -296,7 +304,7 @@ def simulate_flight(
     load name), `loads_effect` (true loads minus the paper's model, Eqs. 1-6 + 12, at the
     true states and the measured input: the load the effect adds), `u_cmd` / `u_eff` /
     `u_meas` (commanded / acting / logged deflection perturbations `[de, dr]`; `clean` holds
-    the logged surface columns, which trail the true ones under `sensor-offset`),
+    the logged surface columns, which trail the true ones under `time-offset`),
     `phase` (flapping phase at the samples), `flap` (the `FlapFrequency`).
     """
     if axis not in _AXES:
@@ -366,8 +374,12 @@ def simulate_flight(
         F_int = F_int + gl
         F_mid = F_mid + 0.5 * (gl[1:] + gl[:-1])
         gust_loads = gl[::substeps]
+    E_int = E_mid = None
+    if active.has_timed:  # loads following time and the flapping frequency
+        t_mid = t_int[:-1] + 0.5 * h
+        E_int, E_mid = active.timed_loads(t_int, flap.f(t_int)), active.timed_loads(t_mid, flap.f(t_mid))
     xc, xo, aux = _integrate(vehicle, active, t_int, u_int, F_int, F_mid, H_int, H_mid, xc0,
-                             xo0, flapping)
+                             xo0, flapping, E_int, E_mid)
     xc, xo = xc[::substeps], xo[::substeps]
     x = xc + xo
     u_act = active.command(t, t, u_cmd)
@@ -385,6 +397,9 @@ def simulate_flight(
         H = flapping_harmonics(phase, vehicle) if active.harmonics else (None, None)
         F_tv = active.flapping(xc, u_eff, F_nom, *H) if active.has_flap else F_nom
     extra = active.extra_loads(xc, u_eff, aux[::substeps] if aux is not None else xc[:, :0])
+    if active.has_timed:
+        timed = active.timed_loads(t, flap.f(t))
+        extra = timed if extra is None else extra + timed
     dF = dF + F_tv + (0.0 if extra is None else extra)
     if gust_loads is not None:
         dF = dF + gust_loads

@@ -51,19 +51,29 @@ def test_gusts_are_a_random_disturbance(effect_flights):
     assert "VERDICT: random-disturbance" in diagnosis_summary(d)
 
 
-def test_a_control_log_that_trails_is_unexplained_not_actuator_dynamics(effect_flights):
+def test_a_control_log_that_trails_is_a_time_offset_not_actuator_dynamics(effect_flights):
     """The deflection acts before it is logged (a clock offset between the logs): the
-    catalogue's actuator entry only lets it act after, so the answer is `unexplained`, driven
-    by the elevator, never a catalogue name."""
-    d = fwid.diagnose(*_load(*effect_flights("sensor-offset", strength=1.0, seed=2)),
+    catalogue's actuator entry only lets it act after, so the answer is `time-offset` (issue
+    16), whose lead is the one injected, never `actuator-dynamics`."""
+    from fwid.synth import Effect
+
+    d = fwid.diagnose(*_load(*effect_flights("time-offset", strength=1.0, seed=2)),
+                      simulation=False)
+    assert d.verdict == "time-offset", (d.verdict, d.first_round)
+    lead = float(d.candidate("time-offset")["variant"].split()[0])  # "0.05 s"
+    assert abs(lead - Effect("time-offset").coefficients()["offset"]) <= 0.02, lead
+    rep = json.loads(json.dumps(d.to_json()))
+    assert {p["effect"] for p in rep["probes"]} == {"attitude", "drift"}
+
+
+def test_an_offset_centre_of_gravity_is_unexplained_with_the_attitude_first(effect_flights):
+    """Loads that follow the attitude (the synthetic `cg-offset`, outside the catalogue):
+    `unexplained`, the attitude angle first among the drivers, no catalogue name."""
+    d = fwid.diagnose(*_load(*effect_flights("cg-offset", strength=1.0, seed=1)),
                       simulation=False)
     assert d.verdict == "unexplained", (d.verdict, d.first_round)
-    assert d.unexplained["probe"] == "input-lead"
-    assert d.unexplained["drivers"][0]["signal"] == "de"
+    assert d.unexplained["drivers"][0]["signal"] == "theta"
     assert d.unexplained["test_shrink_pct"] > 0
-    rep = json.loads(json.dumps(d.to_json()))
-    assert rep["unexplained"]["drivers"][0]["signal"] == "de"
-    assert {p["effect"] for p in rep["probes"]} >= {"input-lead", "attitude"}
 
 
 def _with_load(src, dst, load: str, state: str, gain: float):

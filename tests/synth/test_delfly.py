@@ -407,6 +407,10 @@ def test_effect_changes_flight(effect, axis):
             hb = base[col] - lowpass(base[col])
             he = on[col] - lowpass(on[col])
             assert np.std(he - hb) > 0.05 * np.std(hb), col
+    elif effect == "time-offset":  # the motion is the same; the logged control is late
+        np.testing.assert_array_equal(xe, xb)
+        surf = "de" if axis == "lon" else "dr"
+        assert np.max(np.abs(on[surf] - base[surf])) > 0.1 * np.std(base[surf])
     else:
         d = np.sqrt(np.mean(lowpass(xe - xb) ** 2, axis=0)) / sig
         assert d.max() > 3.0, d  # several noise sigmas in some state

@@ -34,7 +34,8 @@ def base():
 def test_every_effect_has_at_least_four_forms():
     for e in EFFECTS[1:]:
         assert len(FORMS[e]) >= 4, e
-    assert set(OUT_OF_CATALOGUE) == {"turbulence", "unsteady-aero", "sensor-offset"}
+    assert set(OUT_OF_CATALOGUE) == {"turbulence", "cg-offset", "battery-sag"}
+    assert Effect("sensor-offset").name == "time-offset"  # the old name is an alias
     assert Effect("flap-coupling").form == "amplitude"  # the default is the original form
     with pytest.raises(ValueError):
         Effect("flap-coupling", form="wobble")
@@ -59,7 +60,7 @@ def test_form_changes_the_flight_on_its_axes(effect, form, base):
         ref = np.max(np.abs(on["meta"]["loads_effect"]["M" if ax == "lon" else "L"]))
         eff = max(np.std(v) for v in on["meta"]["loads_effect"].values())
         assert eff > 0 and np.isfinite(ref), (ax, eff)
-        if effect == "sensor-offset":
+        if effect == "time-offset":
             assert np.max(np.abs(on["de"] - base[ax]["de"]) + np.abs(on["dr"] - base[ax]["dr"])) > 0
         else:
             assert max(_dload(base[ax], on, k) for k in LON + LAT) > 0
@@ -133,14 +134,40 @@ def test_sensor_offset_shifts_the_measured_control_the_other_way():
     kw = {"axis": "lon", "noise": 0.0, "input": "pulse", "unit": 1.0, "amplitude": 0.1,
           "ripple": False}
     base = simulate_flight(**kw)
-    fl = simulate_flight(effect="sensor-offset", **kw)
-    T = Effect("sensor-offset").coefficients()["offset"]
+    fl = simulate_flight(effect="time-offset", **kw)
+    T = Effect("time-offset").coefficients()["offset"]
     n = round(T * 200)
     np.testing.assert_allclose(fl["de"][n:], base["de"][:-n], atol=1e-12)
     np.testing.assert_array_equal(fl["meta"]["u_eff"], base["meta"]["u_eff"])  # acts at once
     np.testing.assert_array_equal(fl["q"], base["q"])  # the motion is that of no effect
     k0 = base["meta"]["first_input"]
     assert fl["de"][k0 + n - 1] == base["de"][0] and base["de"][k0 + 1] > base["de"][0]
+
+
+def test_flap_frequency_loads_follow_the_true_frequency():
+    """`thrust`: the load the effect adds is `c (f - f0)` at the true frequency (the sidecar's
+    clean `f`), exactly; `lagged` is the same signal late (it correlates best at a lag)."""
+    kw = {"axis": "lon", "noise": 0.0, "seed": 3}
+    fl = simulate_flight(effect="flap-frequency", form="thrust", **kw)
+    c = Effect("flap-frequency", form="thrust").coefficients()
+    df = fl["meta"]["clean"]["f"] - DELFLY.f0
+    for load, k in (("X", "cx"), ("Z", "cz"), ("M", "cm")):
+        np.testing.assert_allclose(fl["meta"]["loads_effect"][load], c[k] * df, atol=1e-12)
+    lag = simulate_flight(effect="flap-frequency", form="lagged", **kw)["meta"]["loads_effect"]["X"]
+    x = (lag - lag.mean()) / lag.std()
+    y = (df - df.mean()) / df.std()
+    xc = [np.mean(x[k:] * y[:len(y) - k]) for k in range(0, 120, 5)]
+    assert 10 <= 5 * int(np.argmax(xc)) <= 60  # 0.05-0.3 s at 200 Hz (tau = 0.15 s)
+
+
+def test_clock_drift_offset_grows_over_the_flight():
+    """`clock-drift`: the logged column is `col(t - k t)`: no offset at the start, `k t` later."""
+    kw = {"axis": "lon", "noise": 0.0, "ripple": False}
+    base = simulate_flight(**kw)
+    fl = simulate_flight(effect="time-offset", form="clock-drift", **kw)
+    k = Effect("time-offset", form="clock-drift").coefficients()["drift"]
+    t = base["t"]
+    np.testing.assert_allclose(fl["de"], np.interp(t - k * t, t, base["de"]), atol=1e-12)
 
 
 def test_two_effects_compose():

@@ -23,9 +23,15 @@ Forms (equations in each module's docstring; index 0 is the default):
 | `nonlinear-aero` | `quadratic`, `cubic`, `rate-damping`, `cross` | `_aero.py` |
 | `lon-lat-coupling` | `control`, `lat-to-lon`, `lon-to-lat`, `rates` | `_coupling.py` |
 | `actuator-dynamics` | `lag`, `delay`, `servo`, `rate-limit` | `_actuator.py` |
+| `unsteady-aero` | `state-lag`, `incidence-lag`, `second-order`, `lift-lag` | `_aero.py` |
+| `time-offset` | `trailing`, `clock-drift`, `sample-hold`, `wandering` (the control columns are late) | `_actuator.py` |
+| `flap-frequency` | `thrust`, `quadratic`, `lateral`, `lagged` | `_frequency.py` |
 | `turbulence` (out) | `gusts` | `_gusts.py` |
-| `unsteady-aero` (out) | `state-lag` | `_aero.py` |
-| `sensor-offset` (out) | `trailing` (the control columns trail the true deflection) | `_actuator.py` |
+| `cg-offset` (out) | `attitude` | `_outside.py` |
+| `battery-sag` (out) | `linear` | `_outside.py` |
+
+`sensor-offset` (the name of `time-offset` before it joined the catalogue) is accepted as an
+alias.
 
 **Two effects at once**: `name` a tuple/list or an `"a+b"` string of distinct effects,
 `form` likewise (one form per effect, `None` entries for defaults), `strength` one number
@@ -43,22 +49,28 @@ import dataclasses
 
 import numpy as np
 
-from . import _actuator, _aero, _coupling, _flapping, _gusts
+from . import _actuator, _aero, _coupling, _flapping, _frequency, _gusts, _outside
 from ._form import Active, Form
 
 #: Effect names (CONTRACTS section 4).
-EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics")
+EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics",
+           "unsteady-aero", "time-offset", "flap-frequency")
 #: Effects the simulator can inject that are not in the catalogue (see the module docstring).
-OUT_OF_CATALOGUE = ("turbulence", "unsteady-aero", "sensor-offset")
+OUT_OF_CATALOGUE = ("turbulence", "cg-offset", "battery-sag")
+#: Older names still accepted.
+ALIASES = {"sensor-offset": "time-offset"}
 
 _CLASSES: dict[str, tuple[type[Form], ...]] = {
     "flap-coupling": _flapping.FORMS,
     "nonlinear-aero": _aero.NONLINEAR,
     "lon-lat-coupling": _coupling.FORMS,
     "actuator-dynamics": _actuator.ACTUATOR,
-    "turbulence": _gusts.TURBULENCE,
     "unsteady-aero": _aero.UNSTEADY,
-    "sensor-offset": _actuator.SENSOR,
+    "time-offset": _actuator.SENSOR,
+    "flap-frequency": _frequency.FORMS,
+    "turbulence": _gusts.TURBULENCE,
+    "cg-offset": _outside.CG_OFFSET,
+    "battery-sag": _outside.BATTERY_SAG,
 }
 #: Form names per effect; the first is the default.
 FORMS: dict[str, tuple[str, ...]] = {"none": ("none",)} | {
@@ -75,6 +87,7 @@ EFFECT_COEFFICIENTS = COEFFICIENTS
 
 def form_class(effect: str, form: str | None = None) -> type[Form]:
     """The class of `form` of `effect` (`None`: the default form)."""
+    effect = ALIASES.get(effect, effect)
     if effect not in _CLASSES:
         raise ValueError(f"effect {effect!r} has no forms; choose one of {', '.join(_CLASSES)}")
     forms = FORMS[effect]
@@ -107,7 +120,7 @@ class Effect:
     form: str | None = None
 
     def __post_init__(self):
-        names = _split(self.name)
+        names = tuple(ALIASES.get(n, n) for n in _split(self.name))
         forms = _split(self.form)
         if len(forms) == 1 and len(names) > 1 and forms[0] is None:
             forms = (None,) * len(names)

@@ -1,4 +1,4 @@
-"""Forms of `actuator-dynamics` (in the catalogue) and `sensor-offset` (outside it).
+"""Forms of `actuator-dynamics` and `time-offset` (both in the catalogue).
 
 `actuator-dynamics`: the deflection acting on the vehicle, `u_eff`, is the commanded one
 through some dynamics; the measured columns `de`, `dr` keep the commanded deflection. So the
@@ -13,11 +13,21 @@ dynamics, is exactly the flight without the effect):
 - `rate-limit` (3): first-order lag whose rate saturates, `u_eff' = clip((u_cmd - u_eff) /
   tau, -rmax, rmax)`, `tau = s tau1`, `rmax = rmax1 / s` [rad/s].
 
-`sensor-offset` (`trailing`, outside the catalogue): the true deflection acts at once, but
-the logged control columns `de`, `dr` trail it by `T = s T1` seconds (the whole measured
-column, ripple included, is `col(t - T)`; before `T` it holds its first value). So the
-response seems to LEAD the measured input: the opposite sign of an actuator delay, which no
-causal actuator model can produce.
+`time-offset` (in the catalogue since issue 16; `sensor-offset` is an alias): the true
+deflection acts at once, but the logged control columns `de`, `dr` (the whole measured
+column, ripple included) are late against the states. So the response seems to LEAD the
+measured input: the opposite sign of an actuator delay, which no causal actuator model can
+produce (an offset of the other sign is indistinguishable from a pure actuator delay and is
+named `actuator-dynamics`). Before the offset the column holds its first value.
+
+- `trailing` (default, index 0): a constant offset, `col(t - T)`, `T = s T1`.
+- `clock-drift` (1): the two clocks run at different rates, so the offset grows over the
+  flight from zero: `col(t - k t)`, `k = s k1` [s per s].
+- `sample-hold` (2): the controls are logged by a slower loop that holds each value for
+  `Th = s Th1` seconds on a grid half a period after the flight's clock (`col(Th
+  (floor(t / Th - 1/2) + 1/2))`): late by `Th / 2` on average, in steps.
+- `wandering` (3): a clock synchronisation that hunts: the offset wanders slowly about
+  `T = s T1`, `col(t - T (1 + 0.5 sin(2 pi 0.3 t)))`.
 """
 
 from __future__ import annotations
@@ -92,11 +102,41 @@ ACTUATOR = (Lag, Delay, Servo, RateLimit)
 
 
 class Trailing(Form):
-    effect, name = "sensor-offset", "trailing"
+    effect, name = "time-offset", "trailing"
     COEFFICIENTS = {"offset": 0.04}
 
     def measured(self, t, column):
         return _delayed(t, t, column, self.c["offset"])
 
 
-SENSOR = (Trailing,)
+class ClockDrift(Form):
+    effect, name = "time-offset", "clock-drift"
+    COEFFICIENTS = {"drift": 0.02}
+
+    def measured(self, t, column):
+        t = np.asarray(t, dtype=float)
+        return _delayed(t, t, column, self.c["drift"] * (t - t[0]))
+
+
+class SampleHold(Form):
+    effect, name = "time-offset", "sample-hold"
+    COEFFICIENTS = {"hold": 0.1}
+
+    def measured(self, t, column):
+        t = np.asarray(t, dtype=float)
+        th = self.c["hold"]  # the logger's grid starts half a period after the flight's
+        held = t[0] + th * (np.floor((t - t[0]) / th - 0.5) + 0.5)
+        return _delayed(held, t, column, 0.0)
+
+
+class Wandering(Form):
+    effect, name = "time-offset", "wandering"
+    COEFFICIENTS = {"offset": 0.04}
+
+    def measured(self, t, column):
+        t = np.asarray(t, dtype=float)
+        T = self.c["offset"] * (1.0 + 0.5 * np.sin(2 * np.pi * 0.3 * (t - t[0])))
+        return _delayed(t, t, column, T)
+
+
+SENSOR = (Trailing, ClockDrift, SampleHold, Wandering)

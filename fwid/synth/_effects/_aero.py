@@ -1,4 +1,4 @@
-"""Forms of `nonlinear-aero` (in the catalogue) and of `unsteady-aero` (outside it).
+"""Forms of `nonlinear-aero` and of `unsteady-aero` (both in the catalogue).
 
 `nonlinear-aero`: extra cycle-averaged loads, nonlinear in the perturbation states; every
 form has longitudinal terms (from lon states, on X Z M) and lateral ones (from lat states,
@@ -15,13 +15,20 @@ on Y L N), so a flight of either axis shows it. `s` is the strength.
   `dX = s cx dw dq`, `dZ = s cz du dq`, `dM = s cm du dw`, `dY = s cy dp dr`,
   `dL = s cl dv dr`, `dN = s cn dv dp`.
 
-`unsteady-aero` (`state-lag`): part of the state-dependent cycle-averaged aerodynamic loads
-(Eqs. 1-6) follows the states through a first-order lag (a lagging wake):
-`dF = Fx (xc + W (xl - xc)) + Fu u`, `xl' = (xc - xl) / tau`, `tau` = 0.075 s fixed, `W`
-diagonal with `s wlon` on q, u, w and `s wlat` on p, r, v (the lagging fraction; the
-lateral one smaller because the fast roll mode makes any lag there much stronger).
-Implemented as the extra load `Fx W (xl - xc)`. Not in the catalogue: no catalogue form
-adds loads lagging the states.
+`unsteady-aero` (in the catalogue since issue 16): part of the state-dependent
+cycle-averaged aerodynamic loads (Eqs. 1-6) follows the states late (a lagging wake). `W`
+is the lagging fraction (`s wlon` on the lon states q u w, `s wlat` on p r v: the lateral
+one smaller because the fast roll mode makes any lag there much stronger); `xl` the lagged
+states (auxiliary states started at the initial state), the extra load `Fx W (xl - xc)`:
+
+- `state-lag` (default, index 0): every state, first order, `xl' = (xc - xl) / tau`,
+  `tau` = 0.075 s.
+- `incidence-lag` (1): only the incidence states w (lon) and v (lat), first order with
+  `tau` = 0.05 s (the Wagner lag of the lift on the angle of attack or sideslip).
+- `second-order` (2): every state through two first-order stages of `tau` = 0.04 s each
+  (a Kuessner-like response that starts flat).
+- `lift-lag` (3): every state, first order, `tau` = 0.075 s (a larger lateral fraction), but only the loads Z, M (lon)
+  and Y, N (lat) lag: X and L follow the states at once.
 """
 
 from __future__ import annotations
@@ -90,6 +97,10 @@ class StateLag(Form):
     effect, name = "unsteady-aero", "state-lag"
     COEFFICIENTS = {"tau": 0.075, "lon": 0.5, "lat": 0.15}
     n_aux = 9
+    #: The states that lag (indices into `STATES`), and the loads that do (`XYZLMN`).
+    LAGGING = (0, 1, 2, 4, 5, 6)
+    LOADS = "XYZLMN"
+    STAGES = 1
 
     @classmethod
     def coefficients(cls, strength):
@@ -98,18 +109,45 @@ class StateLag(Form):
 
     def __init__(self, strength, vehicle):
         super().__init__(strength, vehicle)
+        self.n_aux = 9 * self.STAGES
         w = np.zeros(9)
-        w[:3], w[4:7] = self.c["lon"], self.c["lat"]  # q u w; p r v
-        self._wFx = aero_matrices(vehicle)[0] * w  # columns of Fx weighted by the fractions
+        lon = [i for i in self.LAGGING if i < 3]
+        lat = [i for i in self.LAGGING if i >= 4]
+        w[lon], w[lat] = self.c["lon"], self.c["lat"]
+        rows = np.array(["XYZLMN".index(k) for k in self.LOADS])
+        wFx = np.zeros((6, 9))
+        wFx[rows] = (aero_matrices(vehicle)[0] * w)[rows]
+        self._wFx = wFx  # columns of Fx weighted by the fractions, on the lagging loads
 
     def aux0(self, xc0):
-        return np.array(xc0, dtype=float)
+        return np.tile(np.array(xc0, dtype=float), self.STAGES)
 
     def aux_rhs(self, xc, u_cmd, u, aux):
-        return (xc - aux) / self.c["tau"]
+        tau = self.c["tau"]
+        stages = [xc] + [aux[..., 9 * k: 9 * (k + 1)] for k in range(self.STAGES)]
+        d = [(stages[k] - stages[k + 1]) / tau for k in range(self.STAGES)]
+        return d[0] if self.STAGES == 1 else np.concatenate(d, axis=-1)
 
     def extra_loads(self, xc, u, aux):
-        return (aux - xc) @ self._wFx.T
+        return (aux[..., -9:] - xc) @ self._wFx.T
 
 
-UNSTEADY = (StateLag,)
+class IncidenceLag(StateLag):
+    name = "incidence-lag"
+    COEFFICIENTS = {"tau": 0.05, "lon": 1.6, "lat": 0.3}
+    LAGGING = (2, 6)
+
+
+class SecondOrder(StateLag):
+    name = "second-order"
+    COEFFICIENTS = {"tau": 0.04, "lon": 0.4, "lat": 0.1}
+    STAGES = 2
+
+
+class LiftLag(StateLag):
+    name = "lift-lag"
+    COEFFICIENTS = {"tau": 0.075, "lon": 0.5, "lat": 0.6}
+    LOADS = "YZMN"
+
+
+UNSTEADY = (StateLag, IncidenceLag, SecondOrder, LiftLag)

@@ -12,7 +12,10 @@ deflections `u` `(..., 2)` = `[dde, ddr]`, all cycle-averaged perturbations):
 - `flapping(xc, u, F, H, Q)`: the flapping loads `F` (Eq. 12) as modulated by the motion,
   with `H[..., n, :] = a_n sin(n phi) + b_n cos(n phi)` and its quadrature
   `Q[..., n, :] = a_n cos(n phi) - b_n sin(n phi)` per harmonic when `harmonics` is set;
-- `measured(t, column)`: a measured control column as logged (a sensor time offset);
+- `timed_loads(t, f)`: cycle-averaged loads `(len(t), 6)` that follow time and the true
+  flapping frequency `f` rather than the states (thrust with the flapping frequency, a battery
+  sagging over the flight);
+- `measured(t, column)`: a measured control column as logged (a time offset between logs);
 - `gusts(t, seed)`: unmeasured gust velocities `[ug, wg, vg]`.
 
 Coefficients are given at strength 1 (`COEFFICIENTS`) and scaled by the strength; a form
@@ -68,6 +71,9 @@ class Form:
     def flapping(self, xc, u, F, H, Q):
         return F
 
+    def timed_loads(self, t, f):
+        return None
+
     def measured(self, t, column):
         return column
 
@@ -94,6 +100,7 @@ class Active:
         self.harmonics = any(f.harmonics for f in forms)
         self.has_extra = any(type(f).extra_loads is not Form.extra_loads for f in forms)
         self.has_flap = any(type(f).flapping is not Form.flapping for f in forms)
+        self.has_timed = any(type(f).timed_loads is not Form.timed_loads for f in forms)
         bounds = np.cumsum([0] + [f.n_aux for f in forms])
         self._slices = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
 
@@ -127,6 +134,15 @@ class Active:
         out = None
         for i, f in enumerate(self.forms):
             e = f.extra_loads(xc, u, self._aux(aux, i))
+            if e is not None:
+                out = e if out is None else out + e
+        return out
+
+    def timed_loads(self, t, f):
+        """The summed `timed_loads` of the forms `(len(t), 6)`, or `None`."""
+        out = None
+        for form in self.forms:
+            e = form.timed_loads(t, f)
             if e is not None:
                 out = e if out is None else out + e
         return out
