@@ -156,6 +156,9 @@ class Effect:
     #: Its columns carry states' rates, which integrate what an unmeasured disturbance does
     #: to the other loads: it may be a proxy of gusts (`_diagnose.py` checks the colour).
     rates: bool = False
+    #: A rival outside the catalogue (`_probes.py`): when it wins, the verdict is
+    #: `unexplained`.
+    probe: bool = False
 
 
 CATALOGUE: tuple[Effect, ...] = (

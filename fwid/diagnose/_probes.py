@@ -42,9 +42,9 @@ def _drift(s, load, variant, h, dh):
 
 PROBES: tuple[Effect, ...] = (
     Effect("attitude", "loads follow the attitude angle", "averaged", _attitude,
-           labels=lambda load: (ATTITUDE[axis_of(load)],)),
+           labels=lambda load: (ATTITUDE[axis_of(load)],), probe=True),
     Effect("drift", "a trend over the flight common to all flights", "averaged", _drift,
-           labels=lambda load: ("time", "time")),
+           labels=lambda load: ("time", "time"), probe=True),
 )
 
 #: Names of the probes.

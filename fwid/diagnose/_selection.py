@@ -8,10 +8,14 @@ pass, the one with the largest held-out gain is added. Selection stops when none
 an effect is in, a correlated candidate that only echoed it loses its gain, so it is not named
 twice; a second, different effect keeps its own and is added next.
 
-An entry built on states' rates (`Effect.rates`: `unsteady-aero`) may only enter first: the
-rate of one state carries the load of its own axis (`w' = Z / m + ...`), so once another
-effect is in, such an entry would pick up that effect's leftover misfit on the other loads
-and be named as a second effect that is not there.
+An entry built on states' rates (`Effect.rates`: `unsteady-aero`) is the last resort: the
+rate of one state carries the load it is reconstructed from (`w' = Z / m + ...`), so such an
+entry also "explains" any effect on the other loads of the axis. It gives way to any other
+passing catalogue entry that achieves `1 / RATES_MARGIN` of its held-out gain (a real effect
+on the loads seen through the other loads' rates is explained less well by the rates than
+directly), otherwise it competes with the rest on its gain; and it may enter only as the first effect (once another effect is in, it would
+pick up that effect's leftover misfit on the other loads and name a second effect that is
+not there).
 """
 
 from __future__ import annotations
@@ -29,6 +33,18 @@ ALPHA = 0.01
 MIN_GAIN = 0.02
 #: Most effects selected.
 MAX_EFFECTS = 3
+#: How many times the gain of another passing catalogue entry an entry built on states'
+#: rates must have to be preferred to it.
+RATES_MARGIN = 2.0
+
+
+def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
+    """The passing candidates the round may choose from: an entry built on states' rates
+    drops out when another passing catalogue entry (not a probe) has at least
+    `1 / RATES_MARGIN` of its gain (module docstring)."""
+    rival = max((ev[e.name].mean for e in ok if not e.rates and not e.probe), default=None)
+    return [e for e in ok
+            if not (e.rates and rival is not None and RATES_MARGIN * rival >= ev[e.name].mean)]
 
 
 @dataclasses.dataclass
@@ -65,7 +81,7 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         ok = [e for e in remaining if ev[e.name].p < lv and ev[e.name].gain >= min_gain]
         if not ok:
             break
-        best = max(ok, key=lambda e: ev[e.name].mean)
+        best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
         chosen.append((best, ev[best.name]))
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)

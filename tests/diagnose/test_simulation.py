@@ -77,3 +77,28 @@ def test_augmented_eom_adds_the_extra_loads_as_the_aerodynamic_ones(axis):
     np.testing.assert_allclose(model.f(x, u, p, c), base.f(x, u[:1], pb, c), rtol=1e-12)
     np.testing.assert_allclose(model.forces(x, u, p, c), base.forces(x, u[:1], pb, c),
                                rtol=1e-12)
+
+
+def test_new_catalogue_entries_in_the_eom_read_their_prepared_columns(effect_flights):
+    """`unsteady-aero`, `flap-frequency` and `time-offset` (issue 16) enter the EOM as extra
+    inputs that `prepare` computes from the flight: the lagging part of each state (a first-
+    order lag computed independently here), the frequency's deviation from its median and
+    its square, and the control shifted earlier by the lead."""
+    from scipy.signal import lfilter, lfilter_zi
+
+    model, prepare, left = augment("lon", [("time-offset", 0.03), ("unsteady-aero", 0.05),
+                                           ("flap-frequency", 0.0)])
+    assert left == []
+    assert model.inputs == ("de_eff", "u_lag", "w_lag", "q_lag", "f_dev", "f_dev2")
+    assert {"Mw_lag", "Zq_lag", "Xf_dev", "Mf_dev2"} <= set(model.free)
+    fl = prepare(fwid.load_flights(effect_flights("none", seed=0)[0])[0])
+    w = np.asarray(fl["w"])
+    a = np.exp(-fl.dt / 0.05)
+    b = (0.5 * (1 - a), 0.5 * (1 - a))
+    ref, _ = lfilter(b, (1, -a), w, zi=lfilter_zi(b, (1, -a)) * w[0])
+    np.testing.assert_allclose(np.asarray(fl["w_lag"]), ref - w, atol=1e-12)
+    f = np.asarray(fl["f"])
+    np.testing.assert_allclose(np.asarray(fl["f_dev2"]), (f - np.median(f)) ** 2, atol=1e-12)
+    de = np.asarray(fl["de"]) - float(fl.trim_value("de"))
+    k = round(0.03 / fl.dt)
+    np.testing.assert_allclose(np.asarray(fl["de_eff"])[:-k], de[k:], atol=1e-9)
