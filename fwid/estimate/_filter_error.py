@@ -35,13 +35,12 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array, Float
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
-from ._gauss_newton import NoiseModel, RelaxedGaussNewton, jacobian_once, noise_covariance
+from ._gauss_newton import NoiseModel, noise_covariance, solve_relaxed
 from ._noise import check_noise
 from ._output_error import FitResult, _prepare
 from ._riccati import steady_state_gain
@@ -143,22 +142,13 @@ def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol)
         eye = jnp.eye(theta.shape[0], dtype=theta.dtype)
         return jax.vmap(lambda t: jax.jvp(nus, (theta,), (t,)), out_axes=(None, -1))(eye)
 
-    residuals = jacobian_once(residuals_and_jacobian)
-    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=1e-9, cost_rtol=cost_rtol,
-                                history_length=max_steps)
-    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
-                             throw=False)
-    theta = sol.value
-    v = sol.state.f_info.residual
-    J = sol.state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])
-    R = noise.R(v)
-    _, K, P, C = _innovations(model, theta, Rk, batch, p)
-    Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
-    Sw = jnp.einsum("bkip,ji->bkjp", J, Linv).reshape(-1, theta.shape[0])
-    return dict(theta=theta, R=R, v=v, M=Sw.T @ Sw, cost=sol.state.search_state.cost,
-                steps=sol.stats["num_steps"], accepted=sol.state.search_state.accepted,
-                converged=sol.result == optx.RESULTS.successful, K=K[0], P=P[0], C=C[0],
-                hist=sol.state.search_state.history)
+    sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
+                        max_steps=max_steps)
+    _, K, P, C = _innovations(model, sol.theta, Rk, batch, p)
+    Sw = sol.whitened()[1].reshape(-1, sol.theta.shape[0])
+    return dict(theta=sol.theta, R=sol.R, v=sol.v, M=Sw.T @ Sw, cost=sol.cost,
+                steps=sol.steps, accepted=sol.accepted, converged=sol.converged, K=K[0],
+                P=P[0], C=C[0], hist=sol.history)
 
 
 @eqx.filter_jit

@@ -10,7 +10,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
@@ -20,11 +19,7 @@ from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ..simulate._simulate import simulate, simulate_sensitivities
 from ._colour import colour_at_bandwidth
-from ._gauss_newton import (
-    NoiseModel,
-    RelaxedGaussNewton,
-    jacobian_once,
-)
+from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
 from ._stability import instability_warning
 from ._start import least_squares_start
@@ -186,22 +181,13 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
         m = batch.mask[..., None]
         return (batch.z - ys) * m, -dys * m[..., None]
 
-    residuals = jacobian_once(residuals_and_jacobian)
-    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=1e-9, cost_rtol=cost_rtol,
-                                history_length=max_steps)
-    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
-                             throw=False)
-    state = sol.state
-    theta = sol.value
-    v = state.f_info.residual  # (B, n, ny), at theta: the last accepted point
-    J = state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])  # dv/dtheta
-    R = noise.R(v)
-    cost = state.search_state.cost
+    sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
+                        max_steps=max_steps)
+    theta, v, R, cost = sol.theta, sol.v, sol.R, sol.cost  # v: (B, n, ny), the last accepted
 
     # Uncertainty at the estimate: Cramer-Rao, and corrected for coloured residuals.
-    Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
-    w = v @ Linv.T
-    Sw = -jnp.einsum("bkip,ji->bkjp", J, Linv)  # d(whitened y)/d theta: (B, n, ny, p)
+    w, S = sol.whitened()
+    Sw = -S  # d(whitened y)/d theta: (B, n, ny, p)
     M = fisher_information(Sw.reshape(-1, Sw.shape[-1]))
     # Lags never cross from one experiment into the next. Bartlett lag window spanning
     # LAG_WINDOW_FACTOR residual correlation lengths (>= 2 samples, <= a quarter record).
@@ -218,9 +204,8 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     return dict(theta=theta, R=R, cost=cost, finite=finite, params=first,
                 std=jnp.sqrt(jnp.diag(cov_c)), std_cr=jnp.sqrt(jnp.diag(cov_cr)),
                 corr=correlation(cov_c),
-                passes=state.search_state.accepted, steps=sol.stats["num_steps"],
-                hist=state.search_state.history,
-                converged=sol.result == optx.RESULTS.successful, M=M, cov_cr=cov_cr,
+                passes=sol.accepted, steps=sol.steps, hist=sol.history,
+                converged=sol.converged, M=M, cov_cr=cov_cr,
                 cov=cov_c, lag1=jax.vmap(lag1_autocorrelation)(v, batch.mask),
                 residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
                 colour=jax.vmap(colour_at_bandwidth)(v, batch.z, batch.mask))
