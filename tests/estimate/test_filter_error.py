@@ -166,3 +166,22 @@ def test_tc02_filter_error_converges_stable_with_white_innovations():
     assert bool(res.converged) and res.white, res.whiteness
     A, _ = res.model.state_matrices(res.model.params, {})
     assert np.all(np.linalg.eigvals(np.asarray(A)).real < 0)
+
+
+def test_fit_each_by_filter_error_is_fit_on_each_flight():
+    """`fit_each(method="filter-error")` (a loop over the flights) gives each flight's
+    `fit(method="filter-error")`; an unknown method is a ValueError naming the choices."""
+    flights = [_turbulent_flight(seed=s) for s in (0, 1)]
+    start = _model(Lp=-3.0, Lr=0.5, Lda=-7.0, Np=-0.3, Nr=-1.2, Ndr=-2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        each = fwid.fit_each(start, flights, start="model", method="filter-error")
+        alone = [fwid.fit(start, e, start="model", method="filter-error") for e in flights]
+    assert len(each) == 2
+    for a, b in zip(each, alone):
+        assert isinstance(a, fwid.FilterErrorResult) and a.names == b.names
+        np.testing.assert_allclose(np.asarray(a.theta), np.asarray(b.theta), rtol=1e-8)
+    # the two flights differ: each got its own fit
+    assert not np.allclose(np.asarray(each[0].theta), np.asarray(each[1].theta))
+    with pytest.raises(ValueError, match="'filter-error'"):
+        fwid.fit_each(start, flights, method="kalman")
