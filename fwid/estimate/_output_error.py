@@ -149,6 +149,12 @@ def _merge_batch(model: GreyBoxModel, theta, n_local_batch: int):
     return params
 
 
+def flight_params(merged: dict, b) -> dict:
+    """Flight `b`'s parameters from [`_merge_batch`][]'s dict (a local parameter is an array
+    with one value per flight, a global one a scalar)."""
+    return {k: (v if jnp.ndim(v) == 0 else v[b]) for k, v in merged.items()}
+
+
 def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_passes,
                max_steps, rtol, cost_rtol, n_local_batch=0):
     """The whole estimator on one (padded) batch of experiments that share the parameters.
@@ -168,8 +174,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     def residuals_and_jacobian(theta):
         def one(e, b):
             def params_of(th):  # flight b's parameters (its own local ones in joint fits)
-                m = _merge_batch(model, th, n_local_batch)
-                return {k: (v if jnp.ndim(v) == 0 else v[b]) for k, v in m.items()}
+                return flight_params(_merge_batch(model, th, n_local_batch), b)
             return simulate_sensitivities(model, e, params_of, theta)
 
         B = batch.t.shape[0]
@@ -200,7 +205,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     cov_c = covariance(M, middle)
     finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
     merged = _merge_batch(model, theta, n_local_batch)
-    first = {k: (v[0] if jnp.ndim(v) else v) for k, v in merged.items()}  # flight 0's locals
+    first = flight_params(merged, 0)  # flight 0's locals
     return dict(theta=theta, R=R, cost=cost, finite=finite, params=first,
                 std=jnp.sqrt(jnp.diag(cov_c)), std_cr=jnp.sqrt(jnp.diag(cov_cr)),
                 corr=correlation(cov_c),
