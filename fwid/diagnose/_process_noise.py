@@ -53,8 +53,8 @@ def process_noise(train: Sequence[Flight], axis: str, cutoff: float = 5.0) -> di
     **Keys:** `method` (`"filter-error"`), `flights`, `sample_s` (the filter's step),
     `F` (per state, state units per sqrt(s)), `F_rel` (per measured state, the process
     noise's increment over one filter step, `F sqrt(sample_s)`, over the RMS of the measured
-    state's change per step: about 0 where the state moves as the model says, about 1 where
-    its motion is all random forcing; `None` for an unmeasured state), `innovations_white` and `innovations_outside_pct` (per output: the
+    state's change per step: near 0 where the state moves as the model says, of order 1
+    where random forcing dominates its motion; `None` for an unmeasured state), `innovations_white` and `innovations_outside_pct` (per output: the
     share of lags 1..`whiteness_lags` outside the band), `whiteness_band` (0.95),
     `whiteness_lags`, `whiteness_outside_max_pct`, `converged`, `passes` (relaxations of
     R), `warnings` (the fit's, one sentence each) and, where the fit failed, `message` (the
@@ -83,7 +83,7 @@ def process_noise(train: Sequence[Flight], axis: str, cutoff: float = 5.0) -> di
         j = model.outputs.index(s)
         step = np.concatenate([np.diff(np.asarray(e.z)[:, j]) for e in exps])
         size = float(np.sqrt(np.mean(step ** 2)))
-        F_rel[s] = F[s] * np.sqrt(dt) / size if size > 0 else None
+        F_rel[s] = float(F[s] * np.sqrt(dt) / size) if size > 0 else None
     white = res.whiteness or {}
     return {**block, "sample_s": dt, "F": F, "F_rel": F_rel,
             "innovations_white": {k: bool(w["white"]) for k, w in white.items()},

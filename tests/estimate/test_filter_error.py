@@ -185,3 +185,30 @@ def test_fit_each_by_filter_error_is_fit_on_each_flight():
     assert not np.allclose(np.asarray(each[0].theta), np.asarray(each[1].theta))
     with pytest.raises(ValueError, match="'filter-error'"):
         fwid.fit_each(start, flights, method="kalman")
+
+
+def test_filter_error_with_bias_terms_per_flight():
+    """`local_per_flight=True`: a local parameter (here a bias of the measured roll
+    acceleration, different on each flight) is estimated per flight (`bz@0`, `bz@1`, as in
+    output error's joint fits); by default it is shared (`bz`)."""
+    def h(x, u, p, c):
+        return _h(x, u, p, c) + jnp.stack([0.0, 0.0, p["bz"]])
+
+    model = fwid.GreyBoxModel(_f, h=h, states=("p", "r"), inputs=("da", "dr"),
+                              outputs=("p", "r", "pdot"), params={**TRUE, "bz": 0.0},
+                              local=("bz",), name="rollyaw-bias")
+    flights = []
+    for seed, b in ((0, 0.05), (1, -0.03)):
+        e = _turbulent_flight(seed=seed)
+        flights.append(fwid.Experiment(e.t, e.u, e.z.at[:, 2].add(b), x0=e.x0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        per = fwid.fit_filter_error(model, flights, names=["a", "b"], start="model",
+                                    local_per_flight=True)
+        shared = fwid.fit_filter_error(model, flights, names=["a", "b"], start="model")
+    assert per.names[:len(TRUE)] == tuple(TRUE) and "bz" not in per.names
+    for name, b in (("bz@0", 0.05), ("bz@1", -0.03)):
+        assert abs(float(per.theta[per.names.index(name)]) - b) < 0.01, name
+    assert float(per.flight_model(1).params["bz"]) == float(per.theta[per.names.index("bz@1")])
+    assert "bz" in shared.names and "bz@0" not in shared.names
+    assert per.cost < shared.cost
