@@ -259,7 +259,7 @@ def fit(
     max_steps: int = 60,
     rtol: float = 1e-10,
     cost_rtol: float = 1e-10,
-    local_per_flight: bool = True,
+    local_per_flight: bool | None = None,
     progress: bool = False,
     method: str = "output-error",
     **options,
@@ -290,6 +290,8 @@ def fit(
     - `cost_rtol`: ... and the cost has settled to `cost_rtol (1 + |cost|)`.
     - `local_per_flight`: with several experiments, estimate the model's `local` parameters
       (bias terms) separately for each one (named `name@i`); otherwise they are shared.
+      Default (`None`): per flight for output error, shared for multiple shooting and filter
+      error (`True` makes filter error estimate them per flight too).
     - `progress`: print a line when the fit starts and ends.
     - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
       (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
@@ -310,11 +312,14 @@ def fit(
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     if method != "output-error" or options:
         from ._methods import fit_method
+        if method == "filter-error" and local_per_flight is not None:
+            options = {**options, "local_per_flight": local_per_flight}
         return fit_method(method, model, exps, options, names=names, start=start, noise=noise,
                           max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
                           progress=progress, **options)
     t0 = time.perf_counter()
-    n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
+    per_flight = len(exps) > 1 and model.local and local_per_flight is not False
+    n_local = len(exps) if per_flight else 0
     start_model, theta0 = _prepare(model, exps, names, start, n_local)
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "

@@ -206,6 +206,10 @@ def test_filter_error_with_bias_terms_per_flight():
         per = fwid.fit_filter_error(model, flights, names=["a", "b"], start="model",
                                     local_per_flight=True)
         shared = fwid.fit_filter_error(model, flights, names=["a", "b"], start="model")
+        via_fit = fwid.fit(model, flights, start="model", method="filter-error",
+                           local_per_flight=True)
+    assert via_fit.names == per.names
+    np.testing.assert_allclose(np.asarray(via_fit.theta), np.asarray(per.theta), rtol=1e-8)
     assert per.names[:len(TRUE)] == tuple(TRUE) and "bz" not in per.names
     for name, b in (("bz@0", 0.05), ("bz@1", -0.03)):
         assert abs(float(per.theta[per.names.index(name)]) - b) < 0.01, name
