@@ -20,7 +20,7 @@ def diagnose(args) -> int:
     train, test = fwid.data.build_flights(train), fwid.data.build_flights(test)
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
     diag = fwid.diagnose(train, test, axis=args.axis, simulation=not args.no_simulation,
-                         progress=say)
+                         process_noise=not args.no_process_noise, progress=say)
     print(diagnosis_summary(diag))
     if args.out:
         out = Path(args.out)

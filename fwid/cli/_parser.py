@@ -100,6 +100,9 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--no-simulation", action="store_true",
                    help="skip the gap in the simulated states (the verdict's effects in the EOM, "
                         "re-fitted by output error: the slowest step)")
+    d.add_argument("--no-process-noise", action="store_true",
+                   help="with a random-disturbance verdict, skip the baseline's filter-error "
+                        "fit (the process noise F it takes and its innovations' whiteness)")
     d.add_argument("--out", default=None,
                    help="folder for diagnosis.json and the figure (without it nothing is written)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")

@@ -15,6 +15,7 @@ from ._catalogue import CATALOGUE, Effect
 from ._disturbance import RED_MIN, colour, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES
+from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, Half
@@ -25,7 +26,10 @@ from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, signals
 class Diagnosis:
     """The result of [`fwid.diagnose`][]: `verdict` (an effect name, `"unexplained"`,
     `"random-disturbance"` or `"none"`), `disturbance` (the colour, size and spectrum of the
-    baseline's cycle-averaged held-out residual, `_disturbance.py`), `candidates` (the catalogue, ranked, best first, CONTRACTS section 3), `probes`
+    baseline's cycle-averaged held-out residual, `_disturbance.py`), `process_noise` (with a
+    `"random-disturbance"` verdict, the baseline fitted by filter error on the training
+    flights: the process noise F it takes and whether its innovations are white,
+    `_process_noise.py`; `None` otherwise), `candidates` (the catalogue, ranked, best first, CONTRACTS section 3), `probes`
     (the same for the structure outside the catalogue, `_probes.py`), `unexplained` (what the
     first probe selected says: drivers and shrink; `None` when no probe is selected),
     `localisation` (the gap map of the baseline on the test flights), and the held-out load
@@ -48,6 +52,7 @@ class Diagnosis:
     disturbance: dict | None = None
     first_round: dict = dataclasses.field(default_factory=dict, repr=False)
     simulation: dict | None = None
+    process_noise: dict | None = None
     models: SimulationGap | None = dataclasses.field(default=None, repr=False)
     settings: dict = dataclasses.field(default_factory=dict)
 
@@ -79,6 +84,7 @@ class Diagnosis:
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
+            "process_noise": self.process_noise,
             "simulation": self.simulation,
             "localisation": self.localisation,
             "first_round": self.first_round,
@@ -155,6 +161,7 @@ def diagnose(
     alpha: float = ALPHA,
     min_gain: float = MIN_GAIN,
     simulation: bool = True,
+    process_noise: bool = True,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """Diagnose the sim-to-real gap of the paper's model on held-out flights.
@@ -201,7 +208,9 @@ def diagnose(
     `simulation` (also measure the gap in the simulated states, `_simulation.py`: the
     verdict's effects put into the EOM, re-estimated by output error on the training flights,
     simulated on the test flights; `Diagnosis.models` keeps both identifications),
-    `progress` (called with a line of text at each stage).
+    `process_noise` (with a `"random-disturbance"` verdict, also fit the baseline by filter
+    error on the training flights, Jategaonkar Ch. 5, `_process_noise.py`: the process noise
+    as evidence; a failed fit is recorded in the block, never raised), `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
     check_axis(train, axis, "training")
@@ -368,6 +377,10 @@ def diagnose(
         in_sim = [(probe.name, engine.best_variant(train_idx, (), probe, sigma2))]
     elif verdict not in named:
         in_sim = []
+    noise_block = None
+    if process_noise and verdict == "random-disturbance":
+        say("fitting the baseline by filter error on the training flights (process noise)")
+        noise_block = fit_process_noise(train, axis, cutoff)
     sim = None
     if simulation:
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
@@ -390,6 +403,7 @@ def diagnose(
         unexplained=unexplained,
         disturbance=disturbance,
         simulation=sim.summary if sim is not None else None,
+        process_noise=noise_block,
         models=sim,
         first_round={k: {"p": ev.p, "gain_pct": 100.0 * ev.gain, "t": ev.t}
                      for k, ev in sel.first.items()},

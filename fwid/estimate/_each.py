@@ -1,4 +1,5 @@
-"""Each flight fitted on its own by output-error ML (Eqs. 10-11), all in one vmapped call."""
+"""Each flight fitted on its own: by output-error ML (Eqs. 10-11) all in one vmapped call, or
+by another of [`fwid.fit`][]'s methods (`_methods.py`) flight by flight."""
 
 from __future__ import annotations
 
@@ -16,8 +17,9 @@ from ..models._greybox import GreyBoxModel
 from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ._devices import device_count, flight_mesh, padded_count
+from ._methods import METHODS
 from ._noise import check_noise, fall_back
-from ._output_error import FitResult, _fit_batch, _prepare, _result, with_instability
+from ._output_error import FitResult, _fit_batch, _prepare, _result, fit, with_instability
 from ._start_each import least_squares_start_each
 from ._warnings import issue
 
@@ -54,8 +56,10 @@ def fit_each(
     rtol: float = 1e-10,
     cost_rtol: float = 1e-10,
     progress: bool = False,
+    method: str = "output-error",
+    **options,
 ) -> list[FitResult]:
-    """Fit `model` to each experiment on its own, all in one vmapped call.
+    """Fit `model` to each experiment on its own, all in one vmapped call (output error).
 
     The flights are padded to a common length, one of a few (`fwid.simulate.bucket_length`),
     and masked (a padded sample never enters a cost), so one compiled estimator serves every
@@ -63,8 +67,28 @@ def fit_each(
     XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
     on each flight alone. Arguments as for [`fwid.fit`][].
 
-    **Returns:** one [`fwid.FitResult`][] per experiment, in order.
+    `method` and `options` pick the estimator as in [`fwid.fit`][] (`_methods.py`):
+    `"output-error"` (the default) is the vmapped call above; `"multiple-shooting"` and
+    `"filter-error"` are not vmapped (their Python-level loops: the segments' layout, the
+    filter error's relaxation passes of R with the F compensation, Eq. 5.41) but run as
+    [`fwid.fit`][] on each flight in turn, a Python loop over the flights, each with `start`
+    as given (a least-squares start of its own per flight by default): their estimates are
+    exactly those of [`fwid.fit`][] on each flight alone.
+
+    **Returns:** one [`fwid.FitResult`][] per experiment, in order (a
+    [`fwid.FilterErrorResult`][] each with `method="filter-error"`).
+
+    **Raises:** `ValueError` for an unknown `method` (naming the choices); otherwise as
+    [`fwid.fit`][].
     """
+    if method not in METHODS:
+        raise ValueError(f"fit_each: method must be one of {', '.join(map(repr, METHODS))}, "
+                         f"not {method!r}")
+    if method != "output-error" or options:
+        return _fit_each_looped(model, experiments, names=names, start=start, noise=noise,
+                                max_passes=max_passes, max_steps=max_steps, rtol=rtol,
+                                cost_rtol=cost_rtol, progress=progress, method=method,
+                                **options)
     check_noise(noise)
     exps = [with_measured_x0(model, e) for e in experiments]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
@@ -108,6 +132,16 @@ def fit_each(
         print(f"fwid: {ok}/{len(results)} fits converged, {time.perf_counter() - t0:.1f} s",
               flush=True)
     return results
+
+
+def _fit_each_looped(model, experiments, *, names, progress, **kw) -> list[FitResult]:
+    """[`fwid.fit`][] (any method, `kw` its arguments) on each experiment alone, in turn."""
+    exps = list(experiments)
+    names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
+    if progress:
+        print(f"fwid: fitting {model.name} to {len(exps)} flights one by one "
+              f"({kw['method']})", flush=True)
+    return [fit(model, e, names=[n], progress=progress, **kw) for e, n in zip(exps, names)]
 
 
 def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:

@@ -35,15 +35,14 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array, Float
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment, stack_experiments
-from ._gauss_newton import NoiseModel, RelaxedGaussNewton, jacobian_once, noise_covariance
+from ._gauss_newton import NoiseModel, noise_covariance, solve_relaxed
 from ._noise import check_noise
-from ._output_error import FitResult, _prepare
+from ._output_error import FitResult, _free_layout, _merge_batch, _prepare, flight_params
 from ._riccati import steady_state_gain
 from ._steps import rk4_step
 from ._uncertainty import correlation, covariance, lag1_autocorrelation
@@ -92,7 +91,7 @@ def whiteness(nu, mask, outputs: Sequence[str], lags: int = WHITENESS_LAGS) -> d
     most [`WHITENESS_OUTSIDE_MAX`][] (for white innovations about 5 % fall outside)."""
     nu = np.asarray(nu) * np.asarray(mask)[..., None]
     N = float(np.sum(mask))
-    band = 1.96 / np.sqrt(N)
+    band = 1.96 / float(np.sqrt(N))  # (a Python float: numpy scalars in a static field warn)
     out = {}
     for j, name in enumerate(outputs):
         x = nu[..., j] - np.sum(nu[..., j]) / N * np.asarray(mask)
@@ -126,45 +125,43 @@ def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment, gain: bool = 
     return nus, K, P, C
 
 
-def _innovations(model, theta, Rk, batch, p, gain=True):
-    params = model.merge(theta[:p])
-    return jax.vmap(lambda e: _filter(model, params, theta[p:], Rk, e, gain))(batch)
+def _innovations(model, theta, Rk, batch, p, gain=True, n_local=0):
+    """The innovations of every experiment of `batch` (`theta`: the free parameters, with
+    `n_local` values of each local one, one per experiment, when `n_local > 0`, then F)."""
+    if n_local == 0:
+        params = model.merge(theta[:p])
+        return jax.vmap(lambda e: _filter(model, params, theta[p:], Rk, e, gain))(batch)
+    merged = _merge_batch(model, theta[:p], n_local)
+    return jax.vmap(lambda e, b: _filter(model, flight_params(merged, b), theta[p:], Rk, e,
+                                         gain))(batch, jnp.arange(n_local))
 
 
 @eqx.filter_jit
-def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol):
+def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol, n_local=0):
     """Gauss-Newton on the parameters and F for the gain's innovation covariance `Rk`."""
     noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
 
     def residuals_and_jacobian(theta):
         def nus(th):
-            return _innovations(model, th, Rk, batch, p)[0]
+            return _innovations(model, th, Rk, batch, p, n_local=n_local)[0]
         # one trace of the filter for the innovations and their Jacobian
         eye = jnp.eye(theta.shape[0], dtype=theta.dtype)
         return jax.vmap(lambda t: jax.jvp(nus, (theta,), (t,)), out_axes=(None, -1))(eye)
 
-    residuals = jacobian_once(residuals_and_jacobian)
-    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=1e-9, cost_rtol=cost_rtol,
-                                history_length=max_steps)
-    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
-                             throw=False)
-    theta = sol.value
-    v = sol.state.f_info.residual
-    J = sol.state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])
-    R = noise.R(v)
-    _, K, P, C = _innovations(model, theta, Rk, batch, p)
-    Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
-    Sw = jnp.einsum("bkip,ji->bkjp", J, Linv).reshape(-1, theta.shape[0])
-    return dict(theta=theta, R=R, v=v, M=Sw.T @ Sw, cost=sol.state.search_state.cost,
-                steps=sol.stats["num_steps"], accepted=sol.state.search_state.accepted,
-                converged=sol.result == optx.RESULTS.successful, K=K[0], P=P[0], C=C[0],
-                hist=sol.state.search_state.history)
+    sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
+                        max_steps=max_steps)
+    _, K, P, C = _innovations(model, sol.theta, Rk, batch, p, n_local=n_local)
+    Sw = sol.whitened()[1].reshape(-1, sol.theta.shape[0])
+    return dict(theta=sol.theta, R=sol.R, v=sol.v, M=Sw.T @ Sw, cost=sol.cost,
+                steps=sol.steps, accepted=sol.accepted, converged=sol.converged, K=K[0],
+                P=P[0], C=C[0], hist=sol.history)
 
 
 @eqx.filter_jit
-def _output_error_r(model, theta, batch, p, diagonal):
+def _output_error_r(model, theta, batch, p, diagonal, n_local=0):
     """R (Eq. 11) of the residuals with `K = 0` (F = 0): the book's initial R (Sec. 5.6)."""
-    v = _innovations(model, theta, jnp.eye(batch.z.shape[-1]), batch, p, gain=False)[0]
+    v = _innovations(model, theta, jnp.eye(batch.z.shape[-1]), batch, p, gain=False,
+                     n_local=n_local)[0]
     return noise_covariance(v, jnp.sum(batch.mask), diagonal, jnp.zeros(v.shape[-1]))
 
 
@@ -210,6 +207,7 @@ def fit_filter_error(
     max_outer: int = 60,
     outer_rtol: float = 1e-4,
     steps_per_pass: int = 4,
+    local_per_flight: bool = False,
 ) -> FilterErrorResult:
     """[`fwid.fit`][] with `method="filter-error"` (see the module docstring).
 
@@ -221,7 +219,9 @@ def fit_filter_error(
       compensated, until the diagonal of R changes by less than `outer_rtol` (relative; the
       book's `tolR`). `max_steps` is not used (at most `max_outer * steps_per_pass` steps).
     `noise`: `"auto"` and `"diagonal"` use a diagonal R (as the book), `"full"` a full one.
-    The model's `local` parameters are shared between the experiments.
+    - `local_per_flight`: with several experiments, estimate the model's `local` parameters
+      (bias terms) per experiment (named `name@i`, as output error's joint fits); by default
+      they are shared between the experiments.
 
     **Returns:** a [`FilterErrorResult`][]; its `names` are the model's free parameters and
     then `F_<state>`.
@@ -229,8 +229,9 @@ def fit_filter_error(
     check_noise(noise)
     diagonal = noise != "full"
     t0 = time.perf_counter()
-    start_model, theta0 = _prepare(model, list(exps), list(names), start, 0)
-    p = len(model.free)
+    n_local = len(exps) if (local_per_flight and len(exps) > 1 and model.local) else 0
+    start_model, theta0 = _prepare(model, list(exps), list(names), start, n_local)
+    p = theta0.shape[0]
     f0 = np.asarray(_default_f(model, exps) if process_noise is None else process_noise,
                     dtype=float)
     if f0.shape != (len(model.states),):
@@ -238,7 +239,7 @@ def fit_filter_error(
                          f"not {f0.shape}")
     batch = stack_experiments(list(exps))
     theta = jnp.concatenate([theta0, jnp.asarray(f0)])
-    Rk = _output_error_r(start_model, theta, batch, p, diagonal)
+    Rk = _output_error_r(start_model, theta, batch, p, diagonal, n_local)
     if not bool(jnp.all(jnp.isfinite(Rk))):
         Rk = jnp.diag(jnp.var(batch.z.reshape(-1, batch.z.shape[-1]), axis=0))
     if progress:
@@ -249,7 +250,7 @@ def fit_filter_error(
     halvings, alt = 0, None  # F-compensation halvings; (theta, Rk) before the compensation
     for outer in range(1, max_outer + 1):
         out = _inner(start_model, theta, batch, Rk, p=p, diagonal=diagonal,
-                     max_steps=steps_per_pass, rtol=rtol, cost_rtol=cost_rtol)
+                     max_steps=steps_per_pass, rtol=rtol, cost_rtol=cost_rtol, n_local=n_local)
         steps += int(out["steps"])
         cost = float(out["cost"])
         if last is None and not np.isfinite(cost):
@@ -293,8 +294,10 @@ def fit_filter_error(
     std = jnp.sqrt(jnp.abs(jnp.diag(cov)))
     v = out["v"]
     f_names = tuple(f"F_{s}" for s in model.states)
-    all_names = (*model.free, *f_names)
-    fitted = start_model.with_params(dict(zip(model.free, theta[:p])))
+    free_names = _free_layout(model, n_local)[2]
+    all_names = (*free_names, *f_names)
+    first = flight_params(_merge_batch(model, theta[:p], n_local), 0)  # flight 0's locals
+    fitted = start_model.with_params({k: first[k] for k in model.free})
     res = FilterErrorResult(
         model=fitted, names=all_names, theta=theta, std=std, std_cr=std, cov=cov,
         corr=correlation(cov), R=out["R"], cost=out["cost"], cost_history=out["hist"],

@@ -236,3 +236,58 @@ class RelaxedGaussNewton(optx.AbstractGaussNewton):
         converged = just_accepted & step_small & cost_small
         stalled = state.num_steps_since_acceptance >= self.stall_steps
         return converged | stalled, state.result
+
+
+class RelaxedSolution(eqx.Module):
+    """What [`solve_relaxed`][] found: the estimate `theta`, the residuals `v` `(..., ny)` and
+    their Jacobian `J` `(..., ny, p)` at it (the last accepted point), R of Eq. (11) at `v`,
+    the cost (Eq. 10), the cost `history` of the accepted steps, `accepted` steps, `steps`
+    taken and whether the solver `converged`."""
+
+    theta: Array
+    v: Array
+    J: Array
+    R: Array
+    cost: Array
+    history: Array
+    accepted: Array
+    steps: Array
+    converged: Array
+
+    def whitened(self) -> tuple[Array, Array]:
+        """`(w, S)`: the residuals and their Jacobian whitened by R (`w = L^-1 v`,
+        `S = L^-1 J`, `R = L L^T`), shapes as `v` and `J`; the Fisher information matrix is
+        `sum S^T S` (Eq. 10's Gauss-Newton Hessian at the estimate)."""
+        Linv = jnp.linalg.inv(jnp.linalg.cholesky(self.R))
+        return self.v @ Linv.T, jnp.einsum("...ip,ji->...jp", self.J, Linv)
+
+
+def solve_relaxed(
+    residuals_and_jacobian: Callable[[Array], tuple[Array, Array]],
+    theta0: Array,
+    noise: NoiseModel,
+    *,
+    rtol: float,
+    cost_rtol: float,
+    max_steps: int,
+    atol: float = 1e-9,
+) -> RelaxedSolution:
+    """Minimise the output-error likelihood (Eq. 10, R relaxed by Eq. 11 at every step) of
+    the residuals `v(theta)` by [`RelaxedGaussNewton`][]: one `optimistix.least_squares` solve
+    from `theta0`, the residuals and their Jacobian from `residuals_and_jacobian(theta) ->
+    (v, dv/dtheta)` once per point ([`jacobian_once`][]). Pure and jit/vmap-able; shared by
+    output error (`v` the output errors) and filter error (`v` the innovations, Jategaonkar
+    Eq. 5.36 at a fixed gain)."""
+    residuals = jacobian_once(residuals_and_jacobian)
+    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=atol, cost_rtol=cost_rtol,
+                                history_length=max_steps)
+    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
+                             throw=False)
+    theta = sol.value
+    state = sol.state
+    v = state.f_info.residual
+    J = state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])
+    return RelaxedSolution(theta=theta, v=v, J=J, R=noise.R(v), cost=state.search_state.cost,
+                           history=state.search_state.history,
+                           accepted=state.search_state.accepted, steps=sol.stats["num_steps"],
+                           converged=sol.result == optx.RESULTS.successful)

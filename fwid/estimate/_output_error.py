@@ -10,7 +10,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
@@ -20,11 +19,7 @@ from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ..simulate._simulate import simulate, simulate_sensitivities
 from ._colour import colour_at_bandwidth
-from ._gauss_newton import (
-    NoiseModel,
-    RelaxedGaussNewton,
-    jacobian_once,
-)
+from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
 from ._stability import instability_warning
 from ._start import least_squares_start
@@ -154,6 +149,12 @@ def _merge_batch(model: GreyBoxModel, theta, n_local_batch: int):
     return params
 
 
+def flight_params(merged: dict, b) -> dict:
+    """Flight `b`'s parameters from [`_merge_batch`][]'s dict (a local parameter is an array
+    with one value per flight, a global one a scalar)."""
+    return {k: (v if jnp.ndim(v) == 0 else v[b]) for k, v in merged.items()}
+
+
 def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_passes,
                max_steps, rtol, cost_rtol, n_local_batch=0):
     """The whole estimator on one (padded) batch of experiments that share the parameters.
@@ -173,8 +174,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     def residuals_and_jacobian(theta):
         def one(e, b):
             def params_of(th):  # flight b's parameters (its own local ones in joint fits)
-                m = _merge_batch(model, th, n_local_batch)
-                return {k: (v if jnp.ndim(v) == 0 else v[b]) for k, v in m.items()}
+                return flight_params(_merge_batch(model, th, n_local_batch), b)
             return simulate_sensitivities(model, e, params_of, theta)
 
         B = batch.t.shape[0]
@@ -186,22 +186,13 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
         m = batch.mask[..., None]
         return (batch.z - ys) * m, -dys * m[..., None]
 
-    residuals = jacobian_once(residuals_and_jacobian)
-    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=1e-9, cost_rtol=cost_rtol,
-                                history_length=max_steps)
-    sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
-                             throw=False)
-    state = sol.state
-    theta = sol.value
-    v = state.f_info.residual  # (B, n, ny), at theta: the last accepted point
-    J = state.f_info.jac.as_matrix().reshape(*v.shape, theta.shape[0])  # dv/dtheta
-    R = noise.R(v)
-    cost = state.search_state.cost
+    sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
+                        max_steps=max_steps)
+    theta, v, R, cost = sol.theta, sol.v, sol.R, sol.cost  # v: (B, n, ny), the last accepted
 
     # Uncertainty at the estimate: Cramer-Rao, and corrected for coloured residuals.
-    Linv = jnp.linalg.inv(jnp.linalg.cholesky(R))
-    w = v @ Linv.T
-    Sw = -jnp.einsum("bkip,ji->bkjp", J, Linv)  # d(whitened y)/d theta: (B, n, ny, p)
+    w, S = sol.whitened()
+    Sw = -S  # d(whitened y)/d theta: (B, n, ny, p)
     M = fisher_information(Sw.reshape(-1, Sw.shape[-1]))
     # Lags never cross from one experiment into the next. Bartlett lag window spanning
     # LAG_WINDOW_FACTOR residual correlation lengths (>= 2 samples, <= a quarter record).
@@ -214,13 +205,12 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     cov_c = covariance(M, middle)
     finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
     merged = _merge_batch(model, theta, n_local_batch)
-    first = {k: (v[0] if jnp.ndim(v) else v) for k, v in merged.items()}  # flight 0's locals
+    first = flight_params(merged, 0)  # flight 0's locals
     return dict(theta=theta, R=R, cost=cost, finite=finite, params=first,
                 std=jnp.sqrt(jnp.diag(cov_c)), std_cr=jnp.sqrt(jnp.diag(cov_cr)),
                 corr=correlation(cov_c),
-                passes=state.search_state.accepted, steps=sol.stats["num_steps"],
-                hist=state.search_state.history,
-                converged=sol.result == optx.RESULTS.successful, M=M, cov_cr=cov_cr,
+                passes=sol.accepted, steps=sol.steps, hist=sol.history,
+                converged=sol.converged, M=M, cov_cr=cov_cr,
                 cov=cov_c, lag1=jax.vmap(lag1_autocorrelation)(v, batch.mask),
                 residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
                 colour=jax.vmap(colour_at_bandwidth)(v, batch.z, batch.mask))
@@ -269,7 +259,7 @@ def fit(
     max_steps: int = 60,
     rtol: float = 1e-10,
     cost_rtol: float = 1e-10,
-    local_per_flight: bool = True,
+    local_per_flight: bool | None = None,
     progress: bool = False,
     method: str = "output-error",
     **options,
@@ -300,6 +290,8 @@ def fit(
     - `cost_rtol`: ... and the cost has settled to `cost_rtol (1 + |cost|)`.
     - `local_per_flight`: with several experiments, estimate the model's `local` parameters
       (bias terms) separately for each one (named `name@i`); otherwise they are shared.
+      Default (`None`): per flight for output error, shared for multiple shooting and filter
+      error (`True` makes filter error estimate them per flight too).
     - `progress`: print a line when the fit starts and ends.
     - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
       (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
@@ -320,11 +312,14 @@ def fit(
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     if method != "output-error" or options:
         from ._methods import fit_method
+        if method == "filter-error" and local_per_flight is not None:
+            options = {**options, "local_per_flight": local_per_flight}
         return fit_method(method, model, exps, options, names=names, start=start, noise=noise,
                           max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
                           progress=progress, **options)
     t0 = time.perf_counter()
-    n_local = len(exps) if (len(exps) > 1 and model.local and local_per_flight) else 0
+    per_flight = len(exps) > 1 and model.local and local_per_flight is not False
+    n_local = len(exps) if per_flight else 0
     start_model, theta0 = _prepare(model, exps, names, start, n_local)
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "

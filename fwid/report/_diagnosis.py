@@ -66,6 +66,8 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      "held-out error, but it is red (low/high-frequency PSD ratio "
                      f"{dist['redness']:.1f} >= {dist['red_min']:g}), as gusts or process noise "
                      f"make it; cycle-averaged residual RMS {size}; a filter-error fit models it")
+        if d.process_noise is not None:
+            lines.append("  " + _process_noise_line(d.process_noise))
     elif d.verdict == "unexplained":
         u = d.unexplained
         drv = ", ".join(f"{x['signal']} {x['share_pct']:.0f} %" for x in u["drivers"])
@@ -210,6 +212,18 @@ def plot_gap_sim(d: Diagnosis, path: str | Path | None = None, flight: int = 0) 
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig
+
+
+def _process_noise_line(pn: dict) -> str:
+    """One line on the `process_noise` block: the filter-error fit's F and whiteness."""
+    if "message" in pn:
+        return f"process noise: the filter-error fit failed ({pn['message']})"
+    F = ", ".join(f"{s} {v:.3g}" for s, v in pn["F"].items())
+    white = [k for k, w in pn["innovations_white"].items() if w]
+    return (f"process noise (baseline by filter error on the training flights, "
+            f"{'converged' if pn['converged'] else 'NOT converged'}): F {F}; innovations white "
+            f"on {len(white)}/{len(pn['innovations_white'])} outputs"
+            + (f" ({', '.join(white)})" if white else ""))
 
 
 def write_diagnosis(d: Diagnosis, out: str | Path) -> list[str]:

@@ -148,7 +148,7 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
                      "--effect", "nonlinear-aero", "--strength", "1.5"]) == 0
     capsys.readouterr()
     assert main(["diagnose", "--train", str(train), "--test", str(test), "--out", str(out),
-                 "--quiet", "--no-simulation"]) == 0
+                 "--quiet", "--no-simulation", "--no-process-noise"]) == 0
     text = capsys.readouterr().out
     assert "VERDICT: nonlinear-aero" in text
     rep = json.loads((out / "diagnosis.json").read_text())
@@ -159,6 +159,7 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
     assert rep["localisation"]["by_output"]
     assert (out / "gap_map.png").stat().st_size > 10_000
     assert rep["simulation"] is None and not (out / "gap_sim.png").exists()
+    assert rep["process_noise"] is None  # (only with a random-disturbance verdict)
     # bad input: exit 2, one line, the earlier report untouched
     before = (out / "diagnosis.json").read_text()
     (tmp_path / "bad").mkdir()

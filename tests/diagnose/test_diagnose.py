@@ -39,6 +39,7 @@ def test_names_the_withheld_effect_and_the_error_shrinks(effect_flights, effect)
 def test_none_on_clean_flights(effect_flights, seed):
     d = _diagnose(*effect_flights("none", seed=seed))
     assert d.verdict == "none" and d.unexplained is None
+    assert d.process_noise is None and d.to_json()["process_noise"] is None  # no filter error
     assert not any(c["significant"] for c in d.candidates + d.probes)
     assert d.disturbance["redness"] < d.disturbance["red_min"]  # what is left is noise
 

@@ -35,10 +35,11 @@ def test_redness_of_white_and_of_low_passed_noise():
     np.testing.assert_allclose(band_psd(x, dt), ref, rtol=1e-9)
 
 
-def test_gusts_are_a_random_disturbance(effect_flights):
+def test_gusts_are_a_random_disturbance(effect_flights, tmp_path):
     """Unmeasured gusts: no catalogue name, `random-disturbance`, with the residual's size and
-    spectrum; the report says so."""
-    from fwid.report import diagnosis_summary
+    spectrum, and the baseline's filter-error fit (the process noise F, the innovations'
+    whiteness); the report and diagnosis.json say so."""
+    from fwid.report import diagnosis_summary, write_diagnosis
 
     d = fwid.diagnose(*_load(*effect_flights("turbulence", strength=1.0, seed=3)),
                       simulation=False)
@@ -49,6 +50,28 @@ def test_gusts_are_a_random_disturbance(effect_flights):
     assert set(dist["rms"]) == {"X", "Z", "M"} and all(v > 0 for v in dist["rms"].values())
     assert len(dist["psd"]["M"]) == len(dist["bands_hz"])
     assert "VERDICT: random-disturbance" in diagnosis_summary(d)
+    # the evidence of process noise: the baseline fitted by filter error (Jategaonkar Ch. 5)
+    write_diagnosis(d, tmp_path)
+    pn = json.loads((tmp_path / "diagnosis.json").read_text())["process_noise"]
+    assert pn["method"] == "filter-error" and "message" not in pn, pn
+    assert set(pn["F"]) == {"q", "u", "w", "theta"} and max(pn["F"].values()) > 0
+    assert all(v is None or v >= 0 for v in pn["F_rel"].values())
+    assert set(pn["innovations_white"]) == {"q", "u", "w", "theta"}
+    assert pn["whiteness_band"] == 0.95 and isinstance(pn["converged"], bool)
+    assert "process noise" in diagnosis_summary(d)
+
+
+def test_a_failed_filter_error_fit_is_recorded_not_raised(effect_flights, monkeypatch):
+    from fwid.diagnose import _process_noise
+
+    def fail(*a, **k):
+        raise FloatingPointError("the filter diverged")
+
+    monkeypatch.setattr(_process_noise, "fit_filter_error", fail)
+    train, _ = _load(*effect_flights("turbulence", strength=1.0, seed=3))
+    pn = _process_noise.process_noise(train[:2], "lon")
+    assert pn["converged"] is False and "the filter diverged" in pn["message"]
+    assert "F" not in pn
 
 
 def test_a_control_log_that_trails_is_a_time_offset_not_actuator_dynamics(effect_flights):

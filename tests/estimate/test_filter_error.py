@@ -166,3 +166,53 @@ def test_tc02_filter_error_converges_stable_with_white_innovations():
     assert bool(res.converged) and res.white, res.whiteness
     A, _ = res.model.state_matrices(res.model.params, {})
     assert np.all(np.linalg.eigvals(np.asarray(A)).real < 0)
+
+
+def test_fit_each_by_filter_error_is_fit_on_each_flight():
+    """`fit_each(method="filter-error")` (a loop over the flights) gives each flight's
+    `fit(method="filter-error")`; an unknown method is a ValueError naming the choices."""
+    flights = [_turbulent_flight(seed=s) for s in (0, 1)]
+    start = _model(Lp=-3.0, Lr=0.5, Lda=-7.0, Np=-0.3, Nr=-1.2, Ndr=-2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        each = fwid.fit_each(start, flights, start="model", method="filter-error")
+        alone = [fwid.fit(start, e, start="model", method="filter-error") for e in flights]
+    assert len(each) == 2
+    for a, b in zip(each, alone):
+        assert isinstance(a, fwid.FilterErrorResult) and a.names == b.names
+        np.testing.assert_allclose(np.asarray(a.theta), np.asarray(b.theta), rtol=1e-8)
+    # the two flights differ: each got its own fit
+    assert not np.allclose(np.asarray(each[0].theta), np.asarray(each[1].theta))
+    with pytest.raises(ValueError, match="'filter-error'"):
+        fwid.fit_each(start, flights, method="kalman")
+
+
+def test_filter_error_with_bias_terms_per_flight():
+    """`local_per_flight=True`: a local parameter (here a bias of the measured roll
+    acceleration, different on each flight) is estimated per flight (`bz@0`, `bz@1`, as in
+    output error's joint fits); by default it is shared (`bz`)."""
+    def h(x, u, p, c):
+        return _h(x, u, p, c) + jnp.stack([0.0, 0.0, p["bz"]])
+
+    model = fwid.GreyBoxModel(_f, h=h, states=("p", "r"), inputs=("da", "dr"),
+                              outputs=("p", "r", "pdot"), params={**TRUE, "bz": 0.0},
+                              local=("bz",), name="rollyaw-bias")
+    flights = []
+    for seed, b in ((0, 0.05), (1, -0.03)):
+        e = _turbulent_flight(seed=seed)
+        flights.append(fwid.Experiment(e.t, e.u, e.z.at[:, 2].add(b), x0=e.x0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        per = fwid.fit_filter_error(model, flights, names=["a", "b"], start="model",
+                                    local_per_flight=True)
+        shared = fwid.fit_filter_error(model, flights, names=["a", "b"], start="model")
+        via_fit = fwid.fit(model, flights, start="model", method="filter-error",
+                           local_per_flight=True)
+    assert via_fit.names == per.names
+    np.testing.assert_allclose(np.asarray(via_fit.theta), np.asarray(per.theta), rtol=1e-8)
+    assert per.names[:len(TRUE)] == tuple(TRUE) and "bz" not in per.names
+    for name, b in (("bz@0", 0.05), ("bz@1", -0.03)):
+        assert abs(float(per.theta[per.names.index(name)]) - b) < 0.01, name
+    assert float(per.flight_model(1).params["bz"]) == float(per.theta[per.names.index("bz@1")])
+    assert "bz" in shared.names and "bz@0" not in shared.names
+    assert per.cost < shared.cost
