@@ -13,7 +13,8 @@ rate of one state carries the load it is reconstructed from (`w' = Z / m + ...`)
 entry also "explains" any effect on the other loads of the axis. It gives way to any other
 passing catalogue entry that achieves `1 / RATES_MARGIN` of its held-out gain (a real effect
 on the loads seen through the other loads' rates is explained less well by the rates than
-directly), otherwise it competes with the rest on its gain; and it may enter only as the first effect (once another effect is in, it would
+directly; `RATES_MARGIN` and `RATES_MIN_GAIN` were chosen on the development half of
+`benchmarks/diagnosis_power.py`), otherwise it competes with the rest on its gain; and it may enter only as the first effect (once another effect is in, it would
 pick up that effect's leftover misfit on the other loads and name a second effect that is
 not there).
 """
@@ -35,7 +36,11 @@ MIN_GAIN = 0.02
 MAX_EFFECTS = 3
 #: How many times the gain of another passing catalogue entry an entry built on states'
 #: rates must have to be preferred to it.
-RATES_MARGIN = 2.0
+RATES_MARGIN = 1.2
+#: Smallest typical held-out gain of an entry built on states' rates (3 %): the rates of the
+#: other states carry a little of the load's own noise through the kinematic terms
+#: (`Z = m (w' - q u0 + ..)`), so such an entry needs more than `MIN_GAIN`.
+RATES_MIN_GAIN = 0.03
 
 
 def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
@@ -78,7 +83,8 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         last.update(ev)
         first = first or dict(ev)
         level.update({e.name: lv for e in remaining})
-        ok = [e for e in remaining if ev[e.name].p < lv and ev[e.name].gain >= min_gain]
+        ok = [e for e in remaining if ev[e.name].p < lv
+              and ev[e.name].gain >= (max(min_gain, RATES_MIN_GAIN) if e.rates else min_gain)]
         if not ok:
             break
         best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)

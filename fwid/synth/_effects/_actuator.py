@@ -120,7 +120,7 @@ class ClockDrift(Form):
 
 class SampleHold(Form):
     effect, name = "time-offset", "sample-hold"
-    COEFFICIENTS = {"hold": 0.1}
+    COEFFICIENTS = {"hold": 0.05}
 
     def measured(self, t, column):
         t = np.asarray(t, dtype=float)
