@@ -12,9 +12,9 @@ class _Effects(Sequence):
     when they are needed: for `fwid simulate` and its help, not for `fwid --help`."""
 
     def _all(self):
-        from fwid.synth import EFFECTS, OUT_OF_CATALOGUE
+        from fwid.synth import ALIASES, EFFECTS, OUT_OF_CATALOGUE
 
-        return EFFECTS + OUT_OF_CATALOGUE
+        return EFFECTS + OUT_OF_CATALOGUE + tuple(ALIASES)
 
     def __getitem__(self, i):
         return self._all()[i]

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 def simulate(args) -> int:
     from .._errors import InputError
-    from ..synth import FORMS, write_flights
+    from ..synth import ALIASES, FORMS, write_flights
 
+    args.effect = ALIASES.get(args.effect, args.effect)
     if args.form is not None and args.form not in FORMS.get(args.effect, ()):
         raise InputError(f"--form {args.form!r} is not a form of --effect {args.effect}: choose "
                          f"one of {', '.join(FORMS.get(args.effect, ()))}")

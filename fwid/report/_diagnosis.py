@@ -66,6 +66,11 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      "held-out error, but it is red (low/high-frequency PSD ratio "
                      f"{dist['redness']:.1f} >= {dist['red_min']:g}), as gusts or process noise "
                      f"make it; cycle-averaged residual RMS {size}; a filter-error fit models it")
+        if dist.get("proxy"):
+            px = dist["proxy"]
+            lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but left the "
+                         f"residual red ({px['redness_after']:.1f}): it tracked the disturbance "
+                         "through the states' rates, so it is not named)")
         if d.process_noise is not None:
             lines.append("  " + _process_noise_line(d.process_noise))
     elif d.verdict == "unexplained":

@@ -26,6 +26,7 @@ from ._delfly import (
     state_space as state_space,
 )
 from ._effects import (
+    ALIASES as ALIASES,
     EFFECT_COEFFICIENTS as EFFECT_COEFFICIENTS,
     EFFECTS as EFFECTS,
     FORM_COEFFICIENTS as FORM_COEFFICIENTS,
