@@ -18,7 +18,9 @@ Each effect of the verdict becomes terms of the cycle-averaged model:
   derivative per own load (`Xv`, `Mdr`, `Lq`, ...: Eqs. 1-6 with the cross terms);
 - `nonlinear-aero`: the quadratic terms of `_catalogue.py` in the *simulated* states, with a
   coefficient per own load (`M_qq`, `Z_w|w|`, `X_uw`, ...);
-- the probe `attitude`: a derivative of each own load on the attitude state (`Mtheta`).
+- the probe `attitude`: a derivative of each own load on the attitude state (`Mtheta`);
+- the probe `drift`: the time since the flight's start (per 10 s) and its square as extra
+  inputs, with a coefficient per own load (`Xtime`, `Xtime2`, ...), as the probe fits them.
 
 The extra loads enter the EOM exactly as the aerodynamic ones do (divided by the mass, or
 through the inertia matrix), and the force model used for the least-squares start carries
@@ -42,7 +44,7 @@ from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
 IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
-          "lon-lat-coupling", "nonlinear-aero", "attitude")
+          "lon-lat-coupling", "nonlinear-aero", "attitude", "drift")
 
 
 def _quadratic_terms(axis: str) -> list[tuple[str, Callable]]:
@@ -74,6 +76,12 @@ def _lagging(flight: Flight, state: str, tau: float) -> np.ndarray:
     """The lagging part `lag(x) - x` of the measured `state` (first-order lag `tau`)."""
     x = np.asarray(flight[state], dtype=float)
     return lagged(x, flight.dt, "lag", tau) - x
+
+
+def _elapsed(flight: Flight) -> np.ndarray:
+    """Time since the flight's first sample, per 10 s (the `drift` probe's scale)."""
+    t = np.asarray(flight.t, dtype=float)
+    return (t - t[0]) / 10.0
 
 
 def _frequency(flight: Flight, tau: float) -> np.ndarray:
@@ -128,6 +136,9 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
             xs_idx = [state_index[s] for s in AXIS_STATES[axis]]
             for suffix, g in _quadratic_terms(axis):
                 terms.append((f"_{suffix}", lambda x, ue, g=g: g(x[jnp.array(xs_idx)])))
+        elif name == "drift":
+            add_input("time", lambda fl: _elapsed(fl))
+            add_input("time2", lambda fl: _elapsed(fl) ** 2)
         elif name == "attitude":
             k = state_index[ATTITUDE[axis]]
             terms.append((ATTITUDE[axis], lambda x, ue, k=k: x[k]))

@@ -102,3 +102,14 @@ def test_new_catalogue_entries_in_the_eom_read_their_prepared_columns(effect_fli
     de = np.asarray(fl["de"]) - float(fl.trim_value("de"))
     k = round(0.03 / fl.dt)
     np.testing.assert_allclose(np.asarray(fl["de_eff"])[:-k], de[k:], atol=1e-9)
+
+
+def test_the_drift_probe_in_the_eom_reads_the_elapsed_time(effect_flights):
+    """`drift` (a trend common to all flights) enters as the time since the start per 10 s and
+    its square, with a coefficient per load, as the probe fitted it."""
+    model, prepare, left = augment("lon", [("drift", None)])
+    assert left == [] and model.inputs == ("de", "time", "time2")
+    assert {"Xtime", "Ztime2", "Mtime"} <= set(model.free)
+    fl = prepare(fwid.load_flights(effect_flights("none", seed=0)[0])[0])
+    t = np.asarray(fl.t)
+    np.testing.assert_allclose(np.asarray(fl["time2"]), ((t - t[0]) / 10) ** 2, atol=1e-15)
