@@ -26,6 +26,7 @@ import types
 from ._errors import (
     ExcitationError as ExcitationError,
     FitDivergedError as FitDivergedError,
+    DiagnosisWarning as DiagnosisWarning,
     FitWarning as FitWarning,
     FlightDataError as FlightDataError,
     FwidError as FwidError,
@@ -82,7 +83,7 @@ EXPORTS = {
 }
 _STAGE = {name: stage for stage, names in EXPORTS.items() for name in names}
 _SUBPACKAGES = (*EXPORTS, "synth", "cli")
-__all__ = ["__version__", "ExcitationError", "FitDivergedError", "FitWarning",
+__all__ = ["__version__", "DiagnosisWarning", "ExcitationError", "FitDivergedError", "FitWarning",
            "FlightDataError", "FwidError", "InputError", *_STAGE]
 
 

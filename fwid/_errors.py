@@ -29,3 +29,8 @@ class FitWarning(UserWarning):
     """A fit that finished but should not be trusted as it is: not converged, R
     ill-conditioned, parameters nearly unidentifiable, or not finite. Filter it with
     `warnings.filterwarnings("ignore", category=fwid.FitWarning)`."""
+
+
+class DiagnosisWarning(UserWarning):
+    """A diagnosis that ran but may answer a different question than meant (e.g. the axis
+    diagnosed is not the one the flights manoeuvre in)."""

@@ -49,10 +49,12 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--axis", choices=("lon", "lat"), default="lon",
                    help="manoeuvre axis: elevator (lon) or rudder (lat)")
     s.add_argument("--effect", choices=_Effects(), default="none", metavar="EFFECT",
-                   help="unmodelled effect to inject, one of: %(choices)s")
+                   help="unmodelled effect to inject, one of: %(choices)s (sensor-offset is the "
+                        "old name of time-offset)")
     s.add_argument("--form", default=None,
                    help="the effect's form (fwid.synth.FORMS: e.g. lag, delay, servo, rate-limit "
-                        "for actuator-dynamics); default: its first")
+                        "for actuator-dynamics; an unknown form lists the effect's forms); "
+                        "default: its first")
     s.add_argument("--strength", type=float, default=1.0,
                    help="effect strength (1: as strong as the noise on its loads)")
     s.add_argument("--seed", type=int, default=0, help="random seed")

@@ -91,6 +91,32 @@ def _frequency(flight: Flight, tau: float) -> np.ndarray:
     return lagged(df, flight.dt, "lag", tau) if tau else df
 
 
+def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[str, str]:
+    """What each input that `augment`'s `prepare` adds to a flight is (so the augmented model
+    can be applied to new flights): the diagnosed constants written out."""
+    ctrl, out = AXIS_INPUT[axis], {}
+    for name, variant in effects:
+        if name == "actuator-dynamics":
+            kind, tau = variant
+            out[f"{ctrl}_eff"] = (f"{ctrl} minus its trim through a first-order lag, tau = "
+                                  f"{tau:g} s" if kind == "lag" else
+                                  f"{ctrl} minus its trim, delayed {tau:g} s")
+        elif name == "time-offset":
+            out[f"{ctrl}_eff"] = f"{ctrl} minus its trim, shifted {float(variant):g} s earlier"
+        elif name == "unsteady-aero":
+            for s in AXIS_STATES[axis]:
+                out[f"{s}_lag"] = (f"lag({s}) - {s}: {s} through a first-order lag of tau = "
+                                   f"{float(variant):g} s, minus {s}")
+        elif name == "flap-frequency":
+            lag = f" through a first-order lag of {float(variant):g} s" if variant else ""
+            out["f_dev"] = f"f minus its median over the flight{lag}"
+            out["f_dev2"] = "f_dev squared"
+        elif name == "drift":
+            out["time"] = "time since the flight's first sample / 10 s"
+            out["time2"] = "time squared"
+    return out
+
+
 def augment(axis: str, effects: Sequence[tuple[str, object]]
             ) -> tuple[GreyBoxModel, Callable[[Flight], Flight], list[str]]:
     """The `axis` model (`fwid.longitudinal`/`fwid.lateral`) with `effects` (`(name,

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from .._errors import ExcitationError
+from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units
 from ._catalogue import CATALOGUE, Effect
@@ -19,7 +20,7 @@ from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, Half
-from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, signals
+from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
 
 
 @dataclasses.dataclass
@@ -95,8 +96,8 @@ class Diagnosis:
 def _variant_text(v) -> str | None:
     if v is None:
         return None
-    if isinstance(v, float):  # a probe's time constant or lead
-        return f"{v:g} s"
+    if isinstance(v, float):  # a time constant or lead (0: at once)
+        return f"{v:g} s" if v else "at once"
     kind, tau = v
     return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
 
@@ -110,6 +111,17 @@ def _check_excitation(sigs, axis: str) -> None:
             f"{max(moves):.2g} rad in the training flights ({', '.join(s.name for s in sigs)}); "
             "use flights with a manoeuvre (a 3211 or doublet on the control)"
         )
+    o = AXIS_INPUT[other(axis)]
+    if all(o in s.slow for s in sigs):
+        theirs = np.median([np.std(s.slow[o]) for s in sigs])
+        ours = np.median([np.std(s.slow[d]) for s in sigs])
+        if theirs > 3.0 * ours:
+            warnings.warn(
+                f"the training flights look like {other(axis)} manoeuvres: '{o}' moves "
+                f"{theirs / max(ours, 1e-12):.0f} times more than '{d}' (median standard "
+                f"deviation), but the {axis} axis is diagnosed; pass axis='{other(axis)}' "
+                f"(CLI: --axis {other(axis)}) to diagnose the manoeuvre flown",
+                DiagnosisWarning, stacklevel=3)
 
 
 #: A load is affected by an effect when its held-out gain is at least this share of the
@@ -368,6 +380,7 @@ def diagnose(
         # an entry built on states' rates that leaves the residual red tracked a disturbance
         proxy, effects, in_sim = effects[0], [], []
         verdict = "random-disturbance"
+        unexplained = None  # what entered after a proxy of the disturbance tracks it too
         disturbance["proxy"] = {k: proxy[k] for k in ("effect", "variant", "p", "shrink_pct",
                                                        "redness_after")}
     elif verdict == "none" and disturbance["redness"] >= RED_MIN:

@@ -12,13 +12,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ..data import Flight
 from ..identify import Identification, get_model, identify
-from ._augment import augment
+from ._augment import augment, prepared_inputs
 
 
 @dataclasses.dataclass
@@ -30,6 +30,9 @@ class SimulationGap:
     summary: dict
     baseline: Identification
     augmented: Identification | None
+    #: Adds the inputs the augmented model reads to a flight (`summary["prepared_inputs"]`
+    #: says what they are): apply it to new flights before simulating them with the model.
+    prepare: Callable[[Flight], Flight] | None = None
 
 
 def _rms_by_state(ident: Identification, states: Sequence[str]) -> dict:
@@ -66,6 +69,8 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
         "states": states,
         "effects": in_eom,
         "left_out": left_out,
+        "prepared_inputs": prepared_inputs(axis, [(n, v) for n, v in effects
+                                                  if n not in left_out]),
         "test_rms_before": before,
         "test_rms_after": after,
         "shrink_pct": 100.0 * (1.0 - math.sqrt(float(ratio))),
@@ -76,4 +81,4 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                   "(output-error ML, Eqs. 10-11), simulated on the test flights with their "
                   "bias terms re-estimated",
     }
-    return SimulationGap(summary, before_id, after_id)
+    return SimulationGap(summary, before_id, after_id, prepare)

@@ -96,7 +96,7 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({e['variant']})" if e["variant"] else "")
                      + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
                      f"{'/'.join(e['affected'])}")
-    if d.unexplained is not None and d.verdict != "unexplained":
+    if d.unexplained is not None and d.verdict not in ("unexplained", "random-disturbance"):
         u = d.unexplained
         lines.append(f"  and unexplained structure left: {u['description']}, p = {u['p']:.2g}, "
                      f"driven by {u['drivers'][0]['signal']}: a further "
@@ -111,7 +111,10 @@ def diagnosis_summary(d: Diagnosis) -> str:
                                    f"{sim['shrink_pct']:.1f} % ({change})"
                                    if sim["effects"] else f"nothing added (state RMS {change})")
             + (f"; not in the cycle-averaged EOM: {', '.join(sim['left_out'])}"
-               if sim["left_out"] else ""))
+               if sim["left_out"] else "")
+            + ("" if sim.get("converged", True) else
+               "; CAUTION: an output-error fit did not converge (see simulation.warnings), "
+               "read the shrink as rough"))
     lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'in-band shrink %':>16} "
                  f"{'overall %':>9} {'detect. limit %':>15}")
     for k, c in enumerate(d.candidates + d.probes):
@@ -178,7 +181,9 @@ def plot_gap_map(d: Diagnosis, path: str | Path | None = None) -> Figure:
     ax[1, 1].axhline(1.0, color="k", lw=0.8)
     ax[1, 1].set_xticks(x, loads)
     ax[1, 1].set_ylabel("held-out RMS after / before")
-    ax[1, 1].set_title(f"{'verdict' if d.lead else 'best candidate (not significant)'}"
+    what = ("verdict" if d.lead else "best candidate"
+            + ("" if c["significant"] else " (not significant)"))
+    ax[1, 1].set_title(f"{what}"
                        f": {c['effect']}\nheld-out RMS shrinks {_shrink_text(c)}", fontsize=9)
     ax[1, 1].set_ylim(0, 1.1)
     fig.suptitle(f"fwid diagnose ({d.axis}): verdict {d.verdict}")
@@ -248,6 +253,9 @@ def write_diagnosis(d: Diagnosis, out: str | Path) -> list[str]:
         written.append("gap_sim.png")
         if d.models.augmented is not None:
             rep = identification_report(d.models.augmented)
+            # what the diagnosis fixed (time constants, leads) and what the extra inputs are
+            rep["diagnosed_effects"] = d.simulation["effects"]
+            rep["prepared_inputs"] = d.simulation["prepared_inputs"]
             write_json(out / "augmented_model.json", rep)
             write_text(out / "augmented_parameters.csv", parameters_csv(rep["parameters"]))
             written += ["augmented_model.json", "augmented_parameters.csv"]

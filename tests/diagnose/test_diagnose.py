@@ -181,3 +181,13 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
     fig = plot_gap_map(d)
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
     assert [lab.split()[0] for lab in labels] == ["X", "Z", "M"]
+
+
+def test_warns_when_the_flights_manoeuvre_in_the_other_axis(effect_flights):
+    """Lateral manoeuvres diagnosed on the default (lon) axis: a warning names the axis to
+    pass; the diagnosis still runs."""
+    train, test = (fwid.load_flights(p) for p in effect_flights("none", axis="lat", seed=5,
+                                                                 n_train=4, n_test=4))
+    with pytest.warns(fwid.DiagnosisWarning, match="axis='lat'"):
+        d = fwid.diagnose(train, test, simulation=False)
+    assert d.axis == "lon"

@@ -39,6 +39,9 @@ def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights, tmp
     rep = json.loads((tmp_path / "augmented_model.json").read_text())
     assert rep["model"] == "lon+actuator-dynamics" and rep["parameters"]["Mde"]["std"] > 0
     assert "Mde," in (tmp_path / "augmented_parameters.csv").read_text()
+    # the diagnosed time constant travels with the model, and `prepare` applies it anew
+    assert "first-order lag, tau = " in rep["prepared_inputs"]["de_eff"]
+    assert "de_eff" in d.models.prepare(train[0]).columns
     assert json.loads((tmp_path / "diagnosis.json").read_text())["simulation"]["effects"] == [
         "actuator-dynamics"]
 
