@@ -16,7 +16,7 @@ from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
-from ._devices import device_count, flight_mesh, padded_count
+from ._devices import device_count, flight_mesh, onto_mesh, padded_count, to_host
 from ._methods import METHODS
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result, fit, with_instability
@@ -147,14 +147,17 @@ def _fit_each_looped(model, experiments, *, names, progress, **kw) -> list[FitRe
 def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
     """The raw estimator output of each flight, fitted alone, in one batched call. Every
     device gets the same number of flights: the batch is topped up with copies of the last
-    flight, whose results are dropped."""
+    flight, whose results are dropped. Across processes (`_distributed.py`) each process
+    places its devices' share and gets every flight's output back."""
     B = padded_count(len(exps))
     fill = [exps[-1]] * (B - len(exps))
     n = bucket_length(max(e.n for e in exps))  # a few lengths: a new one rarely compiles
     stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill, n))
     th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
-    out = jax.device_get(_fit_each_batched(model, th, stacked, flight_mesh(B),
-                                           diagonal=diagonal, n_local_batch=0, **kw))
+    mesh = flight_mesh(B)  # over every process's devices after initialize_distributed
+    th, stacked = onto_mesh((th, stacked), mesh)
+    out = to_host(_fit_each_batched(model, th, stacked, mesh, diagonal=diagonal,
+                                    n_local_batch=0, **kw), mesh)
     # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
     # arrays flight by flight costs more than the fits of a large batch).
     return jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])
