@@ -7,11 +7,19 @@ Joins a cluster on 127.0.0.1:PORT with one CPU device, fits [`flights`][] (N, de
 `NO_COLLECTIVES` when JAX cannot set up a CPU cluster.
 """
 
+import socket
 import sys
 
 import numpy as np
 
 NO_COLLECTIVES = 3  # the exit status when this JAX cannot join a CPU cluster
+
+
+def free_port() -> int:
+    """A TCP port free on 127.0.0.1 now (for the cluster's coordinator)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def flights(n: int = 4):

@@ -2,7 +2,6 @@
 `fit_each` in one process."""
 
 import os
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -11,15 +10,9 @@ import numpy as np
 import pytest
 
 import fwid
-from tests.estimate._distributed_worker import NO_COLLECTIVES, flights
+from tests.estimate._distributed_worker import NO_COLLECTIVES, flights, free_port
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _has_cpu_collectives() -> bool:
@@ -33,7 +26,7 @@ def test_two_processes_equal_one(tmp_path):
     estimates equal one process's to 1e-9."""
     if not _has_cpu_collectives():
         pytest.skip("this JAX has no CPU collectives (jax_cpu_collectives_implementation)")
-    port, out = _free_port(), tmp_path / "theta.npy"
+    port, out = free_port(), tmp_path / "theta.npy"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     procs = [subprocess.Popen([sys.executable, "-m", "tests.estimate._distributed_worker",
                                str(pid), "2", str(port), str(out)], cwd=ROOT, env=env,
