@@ -10,7 +10,9 @@ one process with one CPU device, one process with two (fwid's default on 2 cores
 global mesh of two devices, one per process). Every process builds the same flights
 (`_problem.py`, the speed benchmark's, least-squares start as `fit_each` does by default)
 and calls `fit_each`; the first call (compile + fit) and the median of `--repeats` warm calls
-are timed on process 0 (every call is collective across the processes). The estimates of
+are timed on process 0 (every call is collective across the processes), and of the last warm
+call the part spent in the least-squares starts (computed by every process for all flights)
+and in the batched fit (spread over the devices, all-gather included). The estimates of
 every layout are compared with the first (largest relative difference).
 """
 
@@ -48,19 +50,42 @@ def worker(pid: int, nproc: int, port: int, devices: int, n: int, repeats: int,
     F = make_flights(n, 0, consts)
     exps = [experiment(F, i) for i in range(n)]
     model = fwid.longitudinal()
+    spent = _timed_parts()
     t0 = time.perf_counter()
     results = fwid.fit_each(model, exps)
     first = time.perf_counter() - t0
     warm = []
     for _ in range(repeats):
+        spent.clear()
         t0 = time.perf_counter()
         fwid.fit_each(model, exps)
         warm.append(time.perf_counter() - t0)
     if pid == 0:
         Path(out).write_text(json.dumps(dict(
             processes=nproc, devices_per_process=devices, global_devices=len(jax.devices()),
-            first_s=first, warm_s=warm, theta=[np.asarray(r.theta).tolist() for r in results],
+            first_s=first, warm_s=warm, last_warm_parts_s=dict(spent), theta=[np.asarray(r.theta).tolist() for r in results],
             converged=sum(bool(r.converged) for r in results))))
+
+
+def _timed_parts() -> dict:
+    """Time the least-squares starts and the batched fit (all-gather included) inside
+    `fit_each`, by wrapping fwid's internals in this process only; returns the seconds
+    spent in each, by name, since the last `clear()`."""
+    import fwid.estimate._each as each
+
+    spent: dict = {}
+
+    def timed(name, fn):
+        def call(*a, **kw):
+            t0 = time.perf_counter()
+            out = fn(*a, **kw)
+            spent[name] = spent.get(name, 0.0) + time.perf_counter() - t0
+            return out
+        return call
+
+    each.least_squares_start_each = timed("starts", each.least_squares_start_each)
+    each._run_batched = timed("batched fit", each._run_batched)
+    return spent
 
 
 def layout(nproc: int, devices: int, n: int, repeats: int, tmp: Path) -> dict:
@@ -96,18 +121,20 @@ def markdown(recs: list[dict], n: int, load: tuple) -> str:
         "**The machine is a shared 2-core one: absolute times are noisy, read the ratios.**", "",
         "| processes x CPU devices | first call (compile + fit) | warm `fit_each` (median) "
         "| flights/s (warm) | vs 1 x 1 | whole run (processes) | converged "
+        "| of which starts / batched fit (last warm call) "
         "| max rel. diff of estimates vs 1 x 1 |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     w0 = statistics.median(base["warm_s"])
     for r in recs:
         w = statistics.median(r["warm_s"])
-        th = np.array(r["theta"])
+        th, parts = np.array(r["theta"]), r["last_warm_parts_s"]
         diff = float(np.max(np.abs(th - th0) / np.maximum(np.abs(th0), 1e-300)))
         lines.append(
             f"| {r['processes']} x {r['devices_per_process']} | {r['first_s']:.2f} s "
             f"| {w:.3f} s | {n / w:.1f} | {w0 / w:.2f}x | {r['process_wall_s']:.1f} s "
-            f"| {r['converged']}/{n} | {diff:.1e} |")
+            f"| {r['converged']}/{n} | {parts['starts']:.3f} s / {parts['batched fit']:.3f} s "
+            f"| {diff:.1e} |")
     lines += ["", "Warm times (s), every repeat: " + "; ".join(
         f"{r['processes']} x {r['devices_per_process']}: "
         + ", ".join(f"{t:.3f}" for t in r["warm_s"]) for r in recs), ""]

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import jax
 import numpy as np
-from jax.experimental import multihost_utils
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 
@@ -55,8 +54,9 @@ def onto_mesh(tree, mesh: Mesh | None):
 
 
 def to_host(tree, mesh: Mesh | None):
-    """The arrays of `tree` (computed over `mesh`) as numpy arrays, whole on every process:
-    all-gathered over the processes when `mesh` spans them."""
+    """The arrays of `tree` (computed over `mesh`) as numpy arrays. When `mesh` spans
+    processes the arrays must be replicated (gathered in the program that made them): each
+    process reads its own first device's copy."""
     if not spans_processes(mesh):
         return jax.device_get(tree)
-    return multihost_utils.process_allgather(tree, tiled=True)
+    return jax.tree.map(lambda a: np.asarray(a.addressable_data(0)), tree)

@@ -16,7 +16,14 @@ from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
-from ._devices import device_count, flight_mesh, onto_mesh, padded_count, to_host
+from ._devices import (
+    device_count,
+    flight_mesh,
+    onto_mesh,
+    padded_count,
+    spans_processes,
+    to_host,
+)
 from ._methods import METHODS
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result, fit, with_instability
@@ -29,7 +36,8 @@ def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
     """[`_fit_batch`][] on each flight alone: `vmap` over the flights. With a device `mesh`
     (axis `"flights"`, see [`flight_mesh`][]) each device runs its share of the flights as
     its own `vmap` (`shard_map`: the fits are independent, the devices never wait for one
-    another)."""
+    another). A mesh that spans processes (`_distributed.py`) ends with an all-gather in the
+    same program, so that every process holds every flight's output."""
     if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
         out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
         return jax.tree.map(lambda a: a[None], out)
@@ -40,7 +48,15 @@ def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
     if mesh is None:
         return each(theta0s, batches)
     spec = PartitionSpec("flights")
-    return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
+    if not spans_processes(mesh):
+        return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
+                             check_vma=False)(theta0s, batches)
+
+    def each_gathered(th, b):  # across processes: every device ends with every flight's
+        return jax.tree.map(lambda a: jax.lax.all_gather(a, "flights", tiled=True),
+                            each(th, b))
+
+    return jax.shard_map(each_gathered, mesh=mesh, in_specs=spec, out_specs=PartitionSpec(),
                          check_vma=False)(theta0s, batches)
 
 
