@@ -7,7 +7,8 @@
 Three layouts, each a fresh set of processes (compilation cache off, `FWID_JAX_CACHE=0`):
 one process with one CPU device, one process with two (fwid's default on 2 cores: one global
 `shard_map` over both), and two processes with one device each (the same `shard_map` over a
-global mesh of two devices, one per process). Every process builds the same flights
+global mesh of two devices, one per process), free to use every core or each pinned to a core
+of its own (`os.sched_setaffinity`, as a cluster gives each process its own cores). Every process builds the same flights
 (`_problem.py`, the speed benchmark's, least-squares start as `fit_each` does by default)
 and calls `fit_each`; the first call (compile + fit) and the median of `--repeats` warm calls
 are timed on process 0 (every call is collective across the processes), and of the last warm
@@ -31,12 +32,16 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-LAYOUTS = ((1, 1), (1, 2), (2, 1))  # (processes, CPU devices per process)
+LAYOUTS = ((1, 1, 0), (1, 2, 0), (2, 1, 0), (2, 1, 1))  # (processes, devices, pinned)
 
 
-def worker(pid: int, nproc: int, port: int, devices: int, n: int, repeats: int,
+def worker(pid: int, nproc: int, port: int, devices: int, pinned: int, n: int, repeats: int,
            out: str) -> None:
-    """One process of a layout: fit `n` flights, time them, process 0 writes `out` (JSON)."""
+    """One process of a layout: fit `n` flights, time them, process 0 writes `out` (JSON).
+    `pinned`: this process runs on one core of its own (before JAX sizes its threads)."""
+    if pinned:
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cores[pid % len(cores)]})
     os.environ["FWID_CPU_DEVICES"] = str(devices)
     import fwid
 
@@ -62,7 +67,7 @@ def worker(pid: int, nproc: int, port: int, devices: int, n: int, repeats: int,
         warm.append(time.perf_counter() - t0)
     if pid == 0:
         Path(out).write_text(json.dumps(dict(
-            processes=nproc, devices_per_process=devices, global_devices=len(jax.devices()),
+            processes=nproc, devices_per_process=devices, pinned=pinned, global_devices=len(jax.devices()),
             first_s=first, warm_s=warm, last_warm_parts_s=dict(spent), theta=[np.asarray(r.theta).tolist() for r in results],
             converged=sum(bool(r.converged) for r in results))))
 
@@ -88,16 +93,17 @@ def _timed_parts() -> dict:
     return spent
 
 
-def layout(nproc: int, devices: int, n: int, repeats: int, tmp: Path) -> dict:
+def layout(nproc: int, devices: int, pinned: int, n: int, repeats: int, tmp: Path) -> dict:
     """Run one layout as `nproc` fresh processes; process 0's record."""
     sys.path.insert(0, str(ROOT))
     from tests.estimate._distributed_worker import free_port
 
-    out, port = tmp / f"p{nproc}d{devices}.json", free_port()
+    out, port = tmp / f"p{nproc}d{devices}c{pinned}.json", free_port()
     env = dict(os.environ, PYTHONPATH=str(ROOT), FWID_JAX_CACHE="0")
     t0 = time.perf_counter()
     procs = [subprocess.Popen([sys.executable, __file__, "--worker", str(pid), str(nproc),
-                               str(port), str(devices), str(n), str(repeats), str(out)],
+                               str(port), str(devices), str(pinned), str(n), str(repeats),
+                               str(out)],
                               cwd=ROOT, env=env, stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True) for pid in range(nproc)]
     logs = [p.communicate(timeout=900)[0] for p in procs]
@@ -106,6 +112,11 @@ def layout(nproc: int, devices: int, n: int, repeats: int, tmp: Path) -> dict:
     rec = json.loads(out.read_text())
     rec["process_wall_s"] = time.perf_counter() - t0
     return rec
+
+
+def _label(r: dict) -> str:
+    return (f"{r['processes']} x {r['devices_per_process']}"
+            + (", one core each" if r["pinned"] else ""))
 
 
 def markdown(recs: list[dict], n: int, load: tuple) -> str:
@@ -131,13 +142,12 @@ def markdown(recs: list[dict], n: int, load: tuple) -> str:
         th, parts = np.array(r["theta"]), r["last_warm_parts_s"]
         diff = float(np.max(np.abs(th - th0) / np.maximum(np.abs(th0), 1e-300)))
         lines.append(
-            f"| {r['processes']} x {r['devices_per_process']} | {r['first_s']:.2f} s "
+            f"| {_label(r)} | {r['first_s']:.2f} s "
             f"| {w:.3f} s | {n / w:.1f} | {w0 / w:.2f}x | {r['process_wall_s']:.1f} s "
             f"| {r['converged']}/{n} | {parts['starts']:.3f} s / {parts['batched fit']:.3f} s "
             f"| {diff:.1e} |")
     lines += ["", "Warm times (s), every repeat: " + "; ".join(
-        f"{r['processes']} x {r['devices_per_process']}: "
-        + ", ".join(f"{t:.3f}" for t in r["warm_s"]) for r in recs), ""]
+        f"{_label(r)}: " + ", ".join(f"{t:.3f}" for t in r["warm_s"]) for r in recs), ""]
     return "\n".join(lines)
 
 
@@ -146,19 +156,19 @@ def main() -> None:
     ap.add_argument("--flights", type=int, default=16)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", default=str(HERE / "results" / "distributed.json"))
-    ap.add_argument("--worker", nargs=7, help=argparse.SUPPRESS)
+    ap.add_argument("--worker", nargs=8, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
         w = args.worker
-        worker(*map(int, w[:6]), w[6])
+        worker(*map(int, w[:7]), w[7])
         return
     load = os.getloadavg()
     tmp = Path(args.out).parent / ".distributed_tmp"
     tmp.mkdir(parents=True, exist_ok=True)
     recs = []
-    for nproc, devices in LAYOUTS:
-        print(f"{nproc} process(es) x {devices} device(s) ...", flush=True)
-        recs.append(layout(nproc, devices, args.flights, args.repeats, tmp))
+    for nproc, devices, pinned in LAYOUTS:
+        print(f"{nproc} process(es) x {devices} device(s), pinned={pinned} ...", flush=True)
+        recs.append(layout(nproc, devices, pinned, args.flights, args.repeats, tmp))
     for f in tmp.iterdir():
         f.unlink()
     tmp.rmdir()
