@@ -91,6 +91,10 @@ def fit_each(
     as given (a least-squares start of its own per flight by default): their estimates are
     exactly those of [`fwid.fit`][] on each flight alone.
 
+    After [`fwid.initialize_distributed`][] on every process of a cluster, the same call on
+    every process, with the same experiments, spreads the vmapped call over the devices of
+    all processes, and every process gets every result (`_distributed.py`).
+
     **Returns:** one [`fwid.FitResult`][] per experiment, in order (a
     [`fwid.FilterErrorResult`][] each with `method="filter-error"`).
 
