@@ -1,6 +1,7 @@
 from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
 from ._output_error import FitResult as FitResult, fit as fit
 from ._each import fit_each as fit_each
+from ._distributed import initialize_distributed as initialize_distributed
 from ._start import least_squares_start as least_squares_start
 from ._uncertainty import (
     coloured_residual_middle as coloured_residual_middle,

@@ -1,14 +1,17 @@
-"""Independent flights spread over the available devices (CPU cores, GPUs)."""
+"""Independent flights spread over the available devices (CPU cores, GPUs), of this process
+or, after [`initialize_distributed`][fwid.estimate._distributed.initialize_distributed], of
+every process of a cluster (`jax.devices()` is then the global list)."""
 
 from __future__ import annotations
 
 import jax
 import numpy as np
-from jax.sharding import Mesh
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 
 def device_count() -> int:
-    """The devices of JAX's default backend (CPU devices: see `fwid/__init__.py`)."""
+    """The devices of JAX's default backend, over all processes (CPU devices: see
+    `fwid/__init__.py`)."""
     return len(jax.devices())
 
 
@@ -28,3 +31,32 @@ def flight_mesh(n_flights: int) -> Mesh | None:
     if d < 2 or n_flights < 2 or n_flights % d:
         return None
     return Mesh(np.array(jax.devices()), ("flights",))
+
+
+def spans_processes(mesh: Mesh | None) -> bool:
+    """Whether `mesh` has devices of other processes (a `jax.distributed` cluster)."""
+    return mesh is not None and jax.process_count() > 1
+
+
+def onto_mesh(tree, mesh: Mesh | None):
+    """Host arrays with a leading flight axis, the same on every process, as global arrays
+    split over `mesh`'s `"flights"` axis (each process places only its own devices' share).
+    Unchanged on one process: `jit` places them itself."""
+    if not spans_processes(mesh):
+        return tree
+    sharding = NamedSharding(mesh, PartitionSpec("flights"))
+
+    def place(a):
+        a = np.asarray(a)
+        return jax.make_array_from_callback(a.shape, sharding, lambda idx: a[idx])
+
+    return jax.tree.map(place, tree)
+
+
+def to_host(tree, mesh: Mesh | None):
+    """The arrays of `tree` (computed over `mesh`) as numpy arrays. When `mesh` spans
+    processes the arrays must be replicated (gathered in the program that made them): each
+    process reads its own first device's copy."""
+    if not spans_processes(mesh):
+        return jax.device_get(tree)
+    return jax.tree.map(lambda a: np.asarray(a.addressable_data(0)), tree)

@@ -16,7 +16,14 @@ from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._buckets import bucket_length
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
-from ._devices import device_count, flight_mesh, padded_count
+from ._devices import (
+    device_count,
+    flight_mesh,
+    onto_mesh,
+    padded_count,
+    spans_processes,
+    to_host,
+)
 from ._methods import METHODS
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result, fit, with_instability
@@ -29,7 +36,8 @@ def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
     """[`_fit_batch`][] on each flight alone: `vmap` over the flights. With a device `mesh`
     (axis `"flights"`, see [`flight_mesh`][]) each device runs its share of the flights as
     its own `vmap` (`shard_map`: the fits are independent, the devices never wait for one
-    another)."""
+    another). A mesh that spans processes (`_distributed.py`) ends with an all-gather in the
+    same program, so that every process holds every flight's output."""
     if theta0s.shape[0] == 1:  # one flight: no vmap (it would batch the solvers' loops)
         out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), **kw)
         return jax.tree.map(lambda a: a[None], out)
@@ -40,7 +48,15 @@ def _fit_each_batched(model, theta0s, batches, mesh=None, **kw):
     if mesh is None:
         return each(theta0s, batches)
     spec = PartitionSpec("flights")
-    return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
+    if not spans_processes(mesh):
+        return jax.shard_map(each, mesh=mesh, in_specs=spec, out_specs=spec,
+                             check_vma=False)(theta0s, batches)
+
+    def each_gathered(th, b):  # across processes: every device ends with every flight's
+        return jax.tree.map(lambda a: jax.lax.all_gather(a, "flights", tiled=True),
+                            each(th, b))
+
+    return jax.shard_map(each_gathered, mesh=mesh, in_specs=spec, out_specs=PartitionSpec(),
                          check_vma=False)(theta0s, batches)
 
 
@@ -74,6 +90,10 @@ def fit_each(
     [`fwid.fit`][] on each flight in turn, a Python loop over the flights, each with `start`
     as given (a least-squares start of its own per flight by default): their estimates are
     exactly those of [`fwid.fit`][] on each flight alone.
+
+    After [`fwid.initialize_distributed`][] on every process of a cluster, the same call on
+    every process, with the same experiments, spreads the vmapped call over the devices of
+    all processes, and every process gets every result (`_distributed.py`).
 
     **Returns:** one [`fwid.FitResult`][] per experiment, in order (a
     [`fwid.FilterErrorResult`][] each with `method="filter-error"`).
@@ -147,14 +167,17 @@ def _fit_each_looped(model, experiments, *, names, progress, **kw) -> list[FitRe
 def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
     """The raw estimator output of each flight, fitted alone, in one batched call. Every
     device gets the same number of flights: the batch is topped up with copies of the last
-    flight, whose results are dropped."""
+    flight, whose results are dropped. Across processes (`_distributed.py`) each process
+    places its devices' share and gets every flight's output back."""
     B = padded_count(len(exps))
     fill = [exps[-1]] * (B - len(exps))
     n = bucket_length(max(e.n for e in exps))  # a few lengths: a new one rarely compiles
     stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill, n))
     th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
-    out = jax.device_get(_fit_each_batched(model, th, stacked, flight_mesh(B),
-                                           diagonal=diagonal, n_local_batch=0, **kw))
+    mesh = flight_mesh(B)  # over every process's devices after initialize_distributed
+    th, stacked = onto_mesh((th, stacked), mesh)
+    out = to_host(_fit_each_batched(model, th, stacked, mesh, diagonal=diagonal,
+                                    n_local_batch=0, **kw), mesh)
     # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
     # arrays flight by flight costs more than the fits of a large batch).
     return jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])
