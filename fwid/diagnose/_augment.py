@@ -38,8 +38,8 @@ import numpy as np
 from ..data import Flight
 from ..identify import get_model
 from ..models import GreyBoxModel
-from ._catalogue import lagged
-from ._probes import ATTITUDE
+from ._catalogue import frequency_deviation, lagged, lagging_part
+from ._probes import ATTITUDE, elapsed
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
@@ -70,25 +70,6 @@ def _load_rates(axis: str, dF, c):
     Ic = Ix * Iz - Ixz**2
     return jnp.stack([(Iz * dL + Ixz * dN) / Ic, (Ixz * dL + Ix * dN) / Ic, dY / c["mass"],
                       0.0 * dY])
-
-
-def _lagging(flight: Flight, state: str, tau: float) -> np.ndarray:
-    """The lagging part `lag(x) - x` of the measured `state` (first-order lag `tau`)."""
-    x = np.asarray(flight[state], dtype=float)
-    return lagged(x, flight.dt, "lag", tau) - x
-
-
-def _elapsed(flight: Flight) -> np.ndarray:
-    """Time since the flight's first sample, per 10 s (the `drift` probe's scale)."""
-    t = np.asarray(flight.t, dtype=float)
-    return (t - t[0]) / 10.0
-
-
-def _frequency(flight: Flight, tau: float) -> np.ndarray:
-    """The measured flapping frequency minus its median, through a lag `tau` (0: none)."""
-    f = np.asarray(flight["f"], dtype=float)
-    df = f - np.median(f)
-    return lagged(df, flight.dt, "lag", tau) if tau else df
 
 
 def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[str, str]:
@@ -149,11 +130,14 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
             control = f"{ctrl}_eff"
         elif name == "unsteady-aero":
             for s in AXIS_STATES[axis]:
-                add_input(f"{s}_lag", lambda fl, s=s, tau=float(variant): _lagging(fl, s, tau))
+                add_input(f"{s}_lag", lambda fl, s=s, tau=float(variant): lagging_part(
+                    np.asarray(fl[s], dtype=float), fl.dt, tau))
         elif name == "flap-frequency":
             tau = float(variant or 0.0)
-            add_input("f_dev", lambda fl, tau=tau: _frequency(fl, tau))
-            add_input("f_dev2", lambda fl, tau=tau: _frequency(fl, tau) ** 2)
+            add_input("f_dev", lambda fl, tau=tau: frequency_deviation(
+                np.asarray(fl["f"], dtype=float), fl.dt, tau))
+            add_input("f_dev2", lambda fl, tau=tau: frequency_deviation(
+                np.asarray(fl["f"], dtype=float), fl.dt, tau) ** 2)
         elif name == "lon-lat-coupling":
             o = other(axis)
             for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
@@ -163,8 +147,8 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
             for suffix, g in _quadratic_terms(axis):
                 terms.append((f"_{suffix}", lambda x, ue, g=g: g(x[jnp.array(xs_idx)])))
         elif name == "drift":
-            add_input("time", lambda fl: _elapsed(fl))
-            add_input("time2", lambda fl: _elapsed(fl) ** 2)
+            add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))
+            add_input("time2", lambda fl: elapsed(np.asarray(fl.t, dtype=float)) ** 2)
         elif name == "attitude":
             k = state_index[ATTITUDE[axis]]
             terms.append((ATTITUDE[axis], lambda x, ue, k=k: x[k]))

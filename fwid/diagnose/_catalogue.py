@@ -115,6 +115,18 @@ def _actuator(s, load, variant, h, dh):
     return lagged(d, s.dt, kind, tau)[:, None]
 
 
+def lagging_part(x: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """`lag(x) - x`: the part of `x` a first-order lag of `tau` holds back."""
+    return lagged(x, dt, "lag", tau) - x
+
+
+def frequency_deviation(f: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """The flapping frequency minus its median over the flight, through a first-order lag
+    `tau` (0: none)."""
+    df = f - np.median(f)
+    return lagged(df, dt, "lag", tau) if tau else df
+
+
 def unsteady_states(load: str) -> tuple[str, ...]:
     """The states whose lagging part `unsteady-aero` gives `load` (not its own)."""
     return tuple(x for x in AXIS_STATES[axis_of(load)] if x not in OWN_STATES[load])
@@ -122,7 +134,7 @@ def unsteady_states(load: str) -> tuple[str, ...]:
 
 def _unsteady(s, load, tau, h, dh):
     xs = [_slow(s, x) for x in unsteady_states(load)]
-    return np.stack([lagged(x, s.dt, "lag", tau) - x for x in xs], axis=1)
+    return np.stack([lagging_part(x, s.dt, tau) for x in xs], axis=1)
 
 
 def _time_offset(s, load, lead, h, dh):
@@ -131,9 +143,7 @@ def _time_offset(s, load, lead, h, dh):
 
 
 def _flap_frequency(s, load, tau, h, dh):
-    df = _slow(s, "f") - np.median(_slow(s, "f"))
-    if tau:
-        df = lagged(df, s.dt, "lag", tau)
+    df = frequency_deviation(_slow(s, "f"), s.dt, tau)
     return np.stack([df, df * df], axis=1)
 
 

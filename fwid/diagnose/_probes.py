@@ -35,8 +35,13 @@ def _attitude(s, load, variant, h, dh):
     return _slow(s, ATTITUDE[axis_of(load)])[:, None]
 
 
+def elapsed(t: np.ndarray) -> np.ndarray:
+    """Time since the first sample, per 10 s (columns of the size of the others)."""
+    return (t - t[0]) / 10.0
+
+
 def _drift(s, load, variant, h, dh):
-    t = (s.t - s.t[0]) / 10.0  # per 10 s: columns of the size of the others
+    t = elapsed(s.t)
     return np.stack([t, t * t], axis=1)
 
 

@@ -81,6 +81,15 @@ class Form:
         return None
 
 
+def _summed(parts):
+    """The sum of the parts that are not `None`, or `None` if all are."""
+    out = None
+    for p in parts:
+        if p is not None:
+            out = p if out is None else out + p
+    return out
+
+
 def loads(shape, **by_load) -> np.ndarray:
     """A `(..., 6)` load array with the given loads (by name X Y Z L M N) filled in."""
     out = np.zeros(tuple(shape) + (6,))
@@ -131,21 +140,11 @@ class Active:
         return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
 
     def extra_loads(self, xc, u, aux):
-        out = None
-        for i, f in enumerate(self.forms):
-            e = f.extra_loads(xc, u, self._aux(aux, i))
-            if e is not None:
-                out = e if out is None else out + e
-        return out
+        return _summed(f.extra_loads(xc, u, self._aux(aux, i)) for i, f in enumerate(self.forms))
 
     def timed_loads(self, t, f):
         """The summed `timed_loads` of the forms `(len(t), 6)`, or `None`."""
-        out = None
-        for form in self.forms:
-            e = form.timed_loads(t, f)
-            if e is not None:
-                out = e if out is None else out + e
-        return out
+        return _summed(form.timed_loads(t, f) for form in self.forms)
 
     def flapping(self, xc, u, F, H, Q):
         for f in self.forms:
@@ -158,9 +157,4 @@ class Active:
         return column
 
     def gusts(self, t, seed):
-        out = None
-        for f in self.forms:
-            g = f.gusts(t, seed)
-            if g is not None:
-                out = g if out is None else out + g
-        return out
+        return _summed(f.gusts(t, seed) for f in self.forms)
