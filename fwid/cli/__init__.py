@@ -9,6 +9,7 @@ internal error.
 
 from __future__ import annotations
 
+import os
 import sys
 
 from ._diagnose import diagnose
@@ -19,6 +20,21 @@ from ._template import template
 
 COMMANDS = {"simulate": simulate, "template": template, "identify": identify,
             "diagnose": diagnose}
+
+
+def run(argv=None) -> int:
+    """The `fwid` executable: [`main`][] in a process of its own, with Equinox's runtime
+    checks returning NaN instead of raising (`EQX_ON_ERROR=nan`, unless the user set it).
+
+    A raising check is a host callback inside the compiled program, and JAX never writes a
+    program with a host callback to its persistent compilation cache: the batched fit and the
+    simulation would be compiled again by every process (about 5 s of a 16-flight
+    `fwid identify`, `benchmarks/results/speed_process.md`). fwid's solves already run with
+    `throw=False` and judge the result themselves (a NaN is a diverged fit, reported as such).
+    Only set before Equinox is imported, which reads it then."""
+    if "equinox" not in sys.modules:
+        os.environ.setdefault("EQX_ON_ERROR", "nan")
+    return main(argv)
 
 
 def main(argv=None) -> int:
