@@ -15,7 +15,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._catalogue import CATALOGUE, Effect, base_columns
-from ._regression import Projector, harmonic_series, local_design, residual, solve
+from ._regression import (Projector, harmonic_series, local_design, normal_equations, residual,
+                          solve)
 from ._signals import Signals
 
 Model = tuple  # of (Effect, variant) pairs
@@ -62,6 +63,7 @@ class Engine:
         self._design: dict = {}
         self._series: dict = {}
         self._fits: dict = {}
+        self._normal: dict = {}
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]
@@ -112,11 +114,19 @@ class Engine:
         model = in_band(model, channel[1])
         key = (tuple(idx), channel, tuple((e.name, v) for e, v in model))
         if key not in self._fits:
-            band = channel[1]
-            self._fits[key] = solve([self.design(i, channel, model) for i in idx],
-                                    [self.target(i, channel) for i in idx],
-                                    [self.units[i].projector[band] for i in idx])
+            self._fits[key] = solve([self.normal_equations(i, channel, model) for i in idx])
         return self._fits[key]
+
+    def normal_equations(self, i: int, channel, model: Model = ()):
+        """Unit `i`'s share of the normal equations of `channel` under `model` (cached: the
+        folds of the cross-fit share their units)."""
+        model = in_band(model, channel[1])
+        key = (i, channel, tuple((e.name, v) for e, v in model))
+        if key not in self._normal:
+            self._normal[key] = normal_equations(self.design(i, channel, model),
+                                                 self.target(i, channel),
+                                                 self.units[i].projector[channel[1]])
+        return self._normal[key]
 
     def residual(self, i: int, channel, theta, model: Model = ()) -> np.ndarray:
         """Unit `i`'s residual with the global `theta`, its local terms re-estimated."""

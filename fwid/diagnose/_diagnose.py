@@ -19,7 +19,7 @@ from ._probes import PROBES
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
-from ._significance import BLOCK_S, Half
+from ._significance import BLOCK_S, FOLDS, cross_fit_folds
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
 
 
@@ -172,6 +172,7 @@ def diagnose(
     cutoff: float = 5.0,
     alpha: float = ALPHA,
     min_gain: float = MIN_GAIN,
+    folds: int = FOLDS,
     simulation: bool = True,
     process_noise: bool = True,
     progress: Callable[[str], None] | None = None,
@@ -216,7 +217,9 @@ def diagnose(
 
     **Arguments:** `train`, `test` (flights), `axis` (`"lon"`/`"lat"`, the manoeuvre's axis),
     `catalogue`, `probes` (rivals outside the catalogue; `()` for none), `cutoff` (the split
-    [Hz]), `alpha` (family-wise false-alarm level per selection round), `min_gain` (smallest typical held-out relative error drop that counts),
+    [Hz]), `alpha` (family-wise false-alarm level per selection round), `min_gain` (smallest
+    typical held-out relative error drop that counts), `folds` (of the cross-fit: 2, training vs test, or more, each flight group scored by the model fitted on
+    all other flights: more power with few flights, `_significance.FOLDS`),
     `simulation` (also measure the gap in the simulated states, `_simulation.py`: the
     verdict's effects put into the EOM, re-estimated by output error on the training flights,
     simulated on the test flights; `Diagnosis.models` keeps both identifications),
@@ -245,8 +248,8 @@ def diagnose(
     trb_idx = tuple(range(n_tr + n_te, n_tr + n_te + n_trb))
     teb_idx = tuple(range(n_tr + n_te + n_trb, len(engine.units)))
     sigma2 = engine.mean_square(train_idx)
-    halves = [Half(train_idx, teb_idx, sigma2),
-              Half(test_idx, trb_idx, engine.mean_square(test_idx))]
+    halves = cross_fit_folds(engine, n_tr + n_te, [p for p, _ in tr_par + te_par],
+                             n_tr + n_te, n_tr, folds)
 
     say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
         f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")
@@ -428,8 +431,11 @@ def diagnose(
             "baseline": "Eqs. 2-6 below the split + Eq. 12 (3 harmonics) above it, "
                         "per-flight trim and Fourier coefficients, equation error",
             "split_hz": cutoff,
-            "significance": "cross-fit (fit on training, score test blocks; fit on test, score "
-                            "training blocks), loads pooled per candidate, one-sided t test on "
+            "significance": ("cross-fit (fit on training, score test blocks; fit on test, "
+                             "score training blocks)" if len(halves) == 2 else
+                             f"cross-fit over {len(halves)} folds of flights (each fold's "
+                             "blocks scored by the model fitted on the other flights)")
+                            + ", loads pooled per candidate, one-sided t test on "
                             "per-block log error ratios, forward selection at alpha / "
                             "candidates in play",
             "alpha": alpha,

@@ -62,35 +62,40 @@ class Projector:
 GRAM_RCOND = 1e-12
 
 
-def _gram_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Least squares through the normal equations with an eigen-decomposed (pseudo-inverse)
-    Gram matrix: on these tall designs (10^4 rows, tens of unit-norm columns) one matrix
-    product, an order of magnitude faster than an SVD of `a`."""
-    w, v = np.linalg.eigh(a.T @ a)
-    keep = w > GRAM_RCOND * max(float(w[-1]), 1e-300)
-    return v[:, keep] @ ((v[:, keep].T @ (a.T @ b)) / w[keep])
+def normal_equations(design: np.ndarray, target: np.ndarray, projector: Projector
+                     ) -> tuple[np.ndarray, np.ndarray, float]:
+    """One unit's share of the normal equations, its local terms projected out:
+    `(A^T A, A^T b, b^T b)` with `A = P G`, `b = P y`. Sums of these over units give the fit on
+    any set of units (`solve`) without touching the samples again."""
+    a = projector(design) if design.shape[1] else design
+    b = projector(target)
+    return a.T @ a, a.T @ b, float(b @ b)
 
 
-def solve(
-    designs: Sequence[np.ndarray], targets: Sequence[np.ndarray], projectors: Sequence[Projector]
-) -> tuple[np.ndarray, float]:
+def solve(parts: Sequence[tuple[np.ndarray, np.ndarray, float]]) -> tuple[np.ndarray, float]:
     """Global coefficients `theta` minimising `sum_k |P_k (y_k - G_k theta)|^2`, and that
-    minimum (the training error, local terms re-estimated).
+    minimum (the training error, local terms re-estimated), from the units' normal equations
+    (`normal_equations`).
 
     Columns are scaled to unit norm first and rank deficiency (a column that never moves,
     e.g. the rudder in an elevator manoeuvre) is handled by dropping it and by the
-    pseudo-inverse of the Gram matrix (`_gram_solve`).
+    pseudo-inverse of the Gram matrix (eigenvalues below `GRAM_RCOND` of the largest).
     """
-    a = np.concatenate([p(g) for p, g in zip(projectors, designs)], axis=0)
-    b = np.concatenate([p(y) for p, y in zip(projectors, targets)], axis=0)
-    theta = np.zeros(a.shape[1])
-    if a.shape[1]:
-        norms = np.linalg.norm(a, axis=0)
+    ata = sum(p[0] for p in parts)
+    atb = sum(p[1] for p in parts)
+    btb = float(sum(p[2] for p in parts))
+    theta = np.zeros(len(atb))
+    if len(atb):
+        norms = np.sqrt(np.maximum(np.diag(ata), 0.0))
         live = norms > 1e-12 * max(float(norms.max()), 1e-300)
         if np.any(live):
-            sol = _gram_solve(a[:, live] / norms[live], b)
-            theta[live] = sol / norms[live]
-    return theta, float(np.sum((b - a @ theta) ** 2))
+            n = norms[live]
+            w, v = np.linalg.eigh(ata[np.ix_(live, live)] / np.outer(n, n))
+            keep = w > GRAM_RCOND * max(float(w[-1]), 1e-300)
+            sol = v[:, keep] @ ((v[:, keep].T @ (atb[live] / n)) / w[keep])
+            theta[live] = sol / n
+    sse = btb - 2.0 * float(theta @ atb) + float(theta @ ata @ theta) if len(atb) else btb
+    return theta, max(sse, 0.0)
 
 
 def residual(design: np.ndarray, target: np.ndarray, projector: Projector, theta) -> np.ndarray:
