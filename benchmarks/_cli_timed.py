@@ -41,6 +41,9 @@ def _timed(owner, name, part):
 
 def main(argv):
     t0 = time.perf_counter()
+    from fwid.cli import executable_setup
+
+    executable_setup()  # as the `fwid` executable does, before Equinox is imported
     import jax
     import jax.monitoring
 

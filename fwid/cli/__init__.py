@@ -22,18 +22,24 @@ COMMANDS = {"simulate": simulate, "template": template, "identify": identify,
             "diagnose": diagnose}
 
 
-def run(argv=None) -> int:
-    """The `fwid` executable: [`main`][] in a process of its own, with Equinox's runtime
-    checks returning NaN instead of raising (`EQX_ON_ERROR=nan`, unless the user set it).
+def executable_setup() -> None:
+    """What the `fwid` executable sets for its process before anything imports Equinox:
+    runtime checks that return NaN instead of raising (`EQX_ON_ERROR=nan`), unless the user
+    set `EQX_ON_ERROR`.
 
     A raising check is a host callback inside the compiled program, and JAX never writes a
     program with a host callback to its persistent compilation cache: the batched fit and the
     simulation would be compiled again by every process (about 5 s of a 16-flight
     `fwid identify`, `benchmarks/results/speed_process.md`). fwid's solves already run with
     `throw=False` and judge the result themselves (a NaN is a diverged fit, reported as such).
-    Only set before Equinox is imported, which reads it then."""
+    Equinox reads the variable when it is imported, so this does nothing after that."""
     if "equinox" not in sys.modules:
         os.environ.setdefault("EQX_ON_ERROR", "nan")
+
+
+def run(argv=None) -> int:
+    """The `fwid` executable: [`executable_setup`][], then [`main`][]."""
+    executable_setup()
     return main(argv)
 
 
