@@ -19,7 +19,7 @@ from ._probes import PROBES
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
-from ._significance import BLOCK_S, FOLDS, cross_fit_folds
+from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
 
 
@@ -172,7 +172,7 @@ def diagnose(
     cutoff: float = 5.0,
     alpha: float = ALPHA,
     min_gain: float = MIN_GAIN,
-    folds: int = FOLDS,
+    folds: int | None = None,
     simulation: bool = True,
     process_noise: bool = True,
     progress: Callable[[str], None] | None = None,
@@ -218,8 +218,10 @@ def diagnose(
     **Arguments:** `train`, `test` (flights), `axis` (`"lon"`/`"lat"`, the manoeuvre's axis),
     `catalogue`, `probes` (rivals outside the catalogue; `()` for none), `cutoff` (the split
     [Hz]), `alpha` (family-wise false-alarm level per selection round), `min_gain` (smallest
-    typical held-out relative error drop that counts), `folds` (of the cross-fit: 2, training vs test, or more, each flight group scored by the model fitted on
-    all other flights: more power with few flights, `_significance.FOLDS`),
+    typical held-out relative error drop that counts), `folds` (of the cross-fit: 2,
+    training vs test, or more, each group of flights scored by the model fitted on all the
+    others; `None`: eight for a campaign of at most eight flights, else two,
+    `_significance.default_folds`),
     `simulation` (also measure the gap in the simulated states, `_simulation.py`: the
     verdict's effects put into the EOM, re-estimated by output error on the training flights,
     simulated on the test flights; `Diagnosis.models` keeps both identifications),

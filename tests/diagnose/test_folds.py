@@ -6,7 +6,7 @@ from __future__ import annotations
 import types
 
 import fwid
-from fwid.diagnose._significance import cross_fit_folds
+from fwid.diagnose._significance import cross_fit_folds, default_folds
 
 
 class _Engine:
@@ -38,6 +38,7 @@ def test_every_block_scored_once_by_a_model_not_fitted_on_its_flight():
 
 
 def test_two_folds_are_training_and_test():
+    assert default_folds(8) == 8 and default_folds(9) == 2
     halves, _ = _folds(["a", "b", "c", "d"], 2, 2)
     assert [h.fit for h in halves] == [(0, 1), (2, 3)]
 
@@ -52,9 +53,12 @@ def test_groups_do_not_depend_on_the_order_given():
     assert as_names == again_names
 
 
-def test_more_folds_name_the_effect(effect_flights):
+def test_few_flights_get_eight_folds_and_two_can_be_asked_for(effect_flights):
     train, test = effect_flights("actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4)
-    d = fwid.diagnose(fwid.load_flights(train), fwid.load_flights(test), simulation=False,
-                      process_noise=False, folds=8)
+    tr, te = fwid.load_flights(train), fwid.load_flights(test)
+    d = fwid.diagnose(tr, te, simulation=False, process_noise=False)
     assert d.verdict == "actuator-dynamics"
     assert "8 folds" in d.settings["significance"]
+    two = fwid.diagnose(tr, te, simulation=False, process_noise=False, folds=2)
+    assert two.verdict == "actuator-dynamics"
+    assert "score test blocks" in two.settings["significance"]
