@@ -24,6 +24,7 @@ from ._devices import (
     spans_processes,
     to_host,
 )
+from . import _exported as exported
 from ._methods import METHODS
 from ._noise import check_noise, fall_back
 from ._output_error import FitResult, _fit_batch, _prepare, _result, fit, with_instability
@@ -176,8 +177,8 @@ def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
     th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
     mesh = flight_mesh(B)  # over every process's devices after initialize_distributed
     th, stacked = onto_mesh((th, stacked), mesh)
-    out = to_host(_fit_each_batched(model, th, stacked, mesh, diagonal=diagonal,
-                                    n_local_batch=0, **kw), mesh)
+    out = to_host(exported.call(_fit_each_batched, (model, th, stacked), (False, True, True),
+                                mesh, diagonal=diagonal, n_local_batch=0, **kw), mesh)
     # Sliced per flight on the host, then back as JAX arrays in one transfer (slicing device
     # arrays flight by flight costs more than the fits of a large batch).
     return jax.device_put([jax.tree.map(lambda x: x[i], out) for i in range(len(exps))])
