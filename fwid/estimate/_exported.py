@@ -115,13 +115,16 @@ def _path(fn, args, kw) -> Path | None:
     return folder / "exported" / f"{fn.__name__.strip('_')}-{key.hexdigest()[:32]}.jaxexport"
 
 
-def call(fn, args: tuple, sharded: tuple[bool, ...], mesh: Mesh | None, **kw):
-    """`fn(*args, mesh=mesh, **kw)` (`fn` a jitted function of arrays and static values,
-    `kw` static), through its kept program when there is one, else kept now. `sharded`:
-    which of `args` are split over the mesh's `"flights"` axis (the others replicated)."""
-    path = _path(fn, args, {"mesh": mesh, **kw})
+def call(fn, args: tuple, sharded: tuple[bool, ...] = (), mesh: Mesh | None = None, **kw):
+    """`fn(*args, **kw)` (`fn` a jitted function of arrays and static values, `kw` static;
+    with a device `mesh`, `fn(*args, mesh=mesh, **kw)`), through its kept program when there
+    is one, else kept now. `sharded`: which of `args` are split over the mesh's `"flights"`
+    axis (the others replicated)."""
+    if mesh is not None:
+        kw = {"mesh": mesh, **kw}
+    path = _path(fn, args, kw)
     if path is None:
-        return fn(*args, mesh=mesh, **kw)
+        return fn(*args, **kw)
     dyn, static = eqx.partition(args, eqx.is_array)
     leaves, treedef = jax.tree.flatten(dyn)
     exported = None
@@ -132,12 +135,12 @@ def call(fn, args: tuple, sharded: tuple[bool, ...], mesh: Mesh | None, **kw):
             exported = None
     if exported is None:
         def flat(*ls):
-            return fn(*eqx.combine(jax.tree.unflatten(treedef, ls), static), mesh=mesh, **kw)
+            return fn(*eqx.combine(jax.tree.unflatten(treedef, ls), static), **kw)
 
         try:  # a program with a host callback (EQX_ON_ERROR=raise) cannot be exported
             exported = jax.export.export(jax.jit(flat))(*leaves)
         except Exception:  # noqa: BLE001 - traced as before (and any real error raised there)
-            return fn(*args, mesh=mesh, **kw)
+            return fn(*args, **kw)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             tmp = path.with_suffix(f".{os.getpid()}.tmp")

@@ -18,6 +18,7 @@ from ..simulate._buckets import bucket_length, pad_experiment
 from ..simulate._checks import check_experiment
 from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
 from ..simulate._simulate import simulate, simulate_sensitivities
+from . import _exported as exported
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
@@ -330,8 +331,9 @@ def fit(
                 else (_fit_batch_jit, stack_experiments(exps, n)))
 
     def run(diagonal: bool) -> FitResult:
-        out = fn(start_model, theta0, data, diagonal=diagonal, max_passes=max_passes,
-                 max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol, n_local_batch=n_local)
+        out = exported.call(fn, (start_model, theta0, data), diagonal=diagonal,
+                            max_passes=max_passes, max_steps=max_steps, rtol=rtol,
+                            cost_rtol=cost_rtol, n_local_batch=n_local)
         return _result(model, start_model, theta0, out, names, n_local, max_steps,
                        "diagonal" if diagonal else "full")
 
