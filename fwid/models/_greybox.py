@@ -170,6 +170,13 @@ class GreyBoxModel(eqx.Module):
                 f"{self.name}: linearisation point x0 {tuple(x0.shape)} / u0 {tuple(u0.shape)} "
                 f"must have shapes ({len(self.states)},) (states {', '.join(self.states)}) and "
                 f"({len(self.inputs)},) (inputs {', '.join(self.inputs)})")
-        A = jax.jacfwd(self.f, argnums=0)(x0, u0, params, dict(consts))
-        B = jax.jacfwd(self.f, argnums=1)(x0, u0, params, dict(consts))
-        return A, B
+        as_array = lambda d: {k: jnp.asarray(v, dtype=float) for k, v in d.items()}  # noqa: E731
+        return _jacobians(self.f, x0, u0, as_array(params), as_array(consts))
+
+
+@eqx.filter_jit
+def _jacobians(f, x0, u0, params, consts):
+    """`df/dx` and `df/du` at `x0`, `u0`: one compiled program per model and shape (op by op,
+    the Jacobians cost a few dozen small compilations in every new process)."""
+    return (jax.jacfwd(f, argnums=0)(x0, u0, params, consts),
+            jax.jacfwd(f, argnums=1)(x0, u0, params, consts))
