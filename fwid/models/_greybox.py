@@ -170,13 +170,25 @@ class GreyBoxModel(eqx.Module):
                 f"{self.name}: linearisation point x0 {tuple(x0.shape)} / u0 {tuple(u0.shape)} "
                 f"must have shapes ({len(self.states)},) (states {', '.join(self.states)}) and "
                 f"({len(self.inputs)},) (inputs {', '.join(self.inputs)})")
-        as_array = lambda d: {k: jnp.asarray(v, dtype=float) for k, v in d.items()}  # noqa: E731
-        return _jacobians(self.f, x0, u0, as_array(params), as_array(consts))
+        return _jacobians(self.f, x0, u0, _as_arrays(params), _as_arrays(consts))
+
+    def output_matrices(
+        self, params: Params, consts: Mapping[str, Array],
+    ) -> tuple[Float[Array, "ny nx"], Float[Array, "ny nu"]]:
+        """`C = dh/dx`, `D = dh/du` of the output equation at `x = 0, u = 0` (the trim of
+        fwid's perturbation models, as [`state_matrices`][])."""
+        x0, u0 = jnp.zeros(len(self.states)), jnp.zeros(len(self.inputs))
+        return _jacobians(self.h, x0, u0, _as_arrays(params), _as_arrays(consts))
+
+
+def _as_arrays(d: Mapping) -> dict:
+    return {k: jnp.asarray(v, dtype=float) for k, v in d.items()}
 
 
 @eqx.filter_jit
 def _jacobians(f, x0, u0, params, consts):
-    """`df/dx` and `df/du` at `x0`, `u0`: one compiled program per model and shape (op by op,
-    the Jacobians cost a few dozen small compilations in every new process)."""
+    """`df/dx` and `df/du` (`f` the state or the output equation) at `x0`, `u0`: one compiled
+    program per model and shape (op by op, the Jacobians cost a few dozen small
+    compilations in every new process)."""
     return (jax.jacfwd(f, argnums=0)(x0, u0, params, consts),
             jax.jacfwd(f, argnums=1)(x0, u0, params, consts))

@@ -7,7 +7,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -74,8 +73,7 @@ def state_space(model: GreyBoxModel, consts: Mapping[str, float], params=None) -
     p = model.params if params is None else {**model.params, **params}
     c = {k: jnp.asarray(v, dtype=float) for k, v in consts.items()}
     A, B = model.state_matrices(p, c)
-    x0, u0 = jnp.zeros(len(model.states)), jnp.zeros(len(model.inputs))
-    C, D = jax.jacfwd(lambda x, u: model.h(x, u, p, c), argnums=(0, 1))(x0, u0)
+    C, D = model.output_matrices(p, c)
     return StateSpace(*(np.asarray(M, dtype=float).reshape(shape) for M, shape in (
         (A, (len(model.states), len(model.states))), (B, (len(model.states), len(model.inputs))),
         (C, (len(model.outputs), len(model.states))),
