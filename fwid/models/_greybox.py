@@ -170,7 +170,7 @@ class GreyBoxModel(eqx.Module):
                 f"{self.name}: linearisation point x0 {tuple(x0.shape)} / u0 {tuple(u0.shape)} "
                 f"must have shapes ({len(self.states)},) (states {', '.join(self.states)}) and "
                 f"({len(self.inputs)},) (inputs {', '.join(self.inputs)})")
-        return _jacobians(self.f, x0, u0, _as_arrays(params), _as_arrays(consts))
+        return _jacobians(self.f, x0, u0, as_arrays(params), as_arrays(consts))
 
     def output_matrices(
         self, params: Params, consts: Mapping[str, Array],
@@ -178,10 +178,12 @@ class GreyBoxModel(eqx.Module):
         """`C = dh/dx`, `D = dh/du` of the output equation at `x = 0, u = 0` (the trim of
         fwid's perturbation models, as [`state_matrices`][])."""
         x0, u0 = jnp.zeros(len(self.states)), jnp.zeros(len(self.inputs))
-        return _jacobians(self.h, x0, u0, _as_arrays(params), _as_arrays(consts))
+        return _jacobians(self.h, x0, u0, as_arrays(params), as_arrays(consts))
 
 
-def _as_arrays(d: Mapping) -> dict:
+def as_arrays(d: Mapping) -> dict:
+    """Parameters or constants as float arrays: arguments of a compiled program rather than
+    static values it would be compiled again for."""
     return {k: jnp.asarray(v, dtype=float) for k, v in d.items()}
 
 

@@ -5,11 +5,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import diffrax
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ..models._greybox import GreyBoxModel, Params
+from ..models._greybox import GreyBoxModel, Params, as_arrays
 from ._experiment import Experiment
 from ._rk4 import RK4
 
@@ -147,4 +148,11 @@ def simulate_forces(model: GreyBoxModel, xs, exp: Experiment, params: Params | N
     params = model.params if params is None else params
     if model.forces is None:
         raise ValueError(f"model {model.name!r} has no force model")
-    return jax.vmap(lambda x, uk: model.forces(x, uk, params, exp.consts))(xs, exp.u)
+    return _forces_along(model.forces, xs, exp.u, as_arrays(params), as_arrays(exp.consts))
+
+
+@eqx.filter_jit
+def _forces_along(forces, xs, u, params, consts):
+    """`forces` at every sample: one compiled program per force model and shape (called op
+    by op after a fit, it compiled a handful of small programs in every new process)."""
+    return jax.vmap(lambda x, uk: forces(x, uk, params, consts))(xs, u)
