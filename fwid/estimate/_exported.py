@@ -127,31 +127,52 @@ def call(fn, args: tuple, sharded: tuple[bool, ...] = (), mesh: Mesh | None = No
         return fn(*args, **kw)
     dyn, static = eqx.partition(args, eqx.is_array)
     leaves, treedef = jax.tree.flatten(dyn)
-    exported = None
-    if path.exists():
-        try:
-            exported = jax.export.deserialize(bytearray(path.read_bytes()))
-        except Exception:  # noqa: BLE001 - an unreadable entry is traced again
-            exported = None
-    if exported is None:
-        def flat(*ls):
-            return fn(*eqx.combine(jax.tree.unflatten(treedef, ls), static), **kw)
+    runner = _RUNNERS.get(path)
+    if runner is None:
+        exported = _load(path)
+        if exported is None:
+            def flat(*ls):
+                return fn(*eqx.combine(jax.tree.unflatten(treedef, ls), static), **kw)
 
-        try:  # a program with a host callback (EQX_ON_ERROR=raise) cannot be exported
-            exported = jax.export.export(jax.jit(flat))(*leaves)
-        except Exception:  # noqa: BLE001 - traced as before (and any real error raised there)
-            return fn(*args, **kw)
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_bytes(exported.serialize())
-            os.replace(tmp, path)  # whole or not at all: processes may share the folder
-        except (OSError, ImportError):  # read-only folder, no flatbuffers: not kept
-            pass
-    if mesh is None:
-        return exported.call(*leaves)
-    split = [s for arg, s in zip(args, sharded)
-             for _ in jax.tree.leaves(eqx.filter(arg, eqx.is_array))]
-    shardings = tuple(NamedSharding(mesh, PartitionSpec("flights") if s else PartitionSpec())
-                      for s in split)
-    return jax.jit(exported.call, in_shardings=shardings)(*leaves)
+            try:  # a program with a host callback (EQX_ON_ERROR=raise) cannot be exported
+                exported = jax.export.export(jax.jit(flat))(*leaves)
+            except Exception:  # noqa: BLE001 - traced as before (any real error raised there)
+                return fn(*args, **kw)
+            _keep(path, exported)
+        if mesh is None:
+            runner = jax.jit(exported.call)
+        else:
+            split = [s for arg, s in zip(args, sharded)
+                     for _ in jax.tree.leaves(eqx.filter(arg, eqx.is_array))]
+            runner = jax.jit(exported.call, in_shardings=tuple(
+                NamedSharding(mesh, PartitionSpec("flights") if s else PartitionSpec())
+                for s in split))
+        _RUNNERS[path] = runner
+    return runner(*leaves)
+
+
+#: The kept programs already loaded by this process, ready to call, by file: a second call
+#: neither reads the file nor lowers the program again.
+_RUNNERS: dict = {}
+
+
+def _load(path: Path):
+    """The kept program in `path`, or `None` (none yet, or unreadable: traced again)."""
+    if not path.exists():
+        return None
+    try:
+        return jax.export.deserialize(bytearray(path.read_bytes()))
+    except Exception:  # noqa: BLE001 - an unreadable entry is traced again
+        return None
+
+
+def _keep(path: Path, exported) -> None:
+    """Write `exported` to `path` whole or not at all (processes may share the folder); a
+    read-only folder or a missing `flatbuffers` only means it is not kept."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_bytes(exported.serialize())
+        os.replace(tmp, path)
+    except (OSError, ImportError):
+        pass

@@ -43,6 +43,9 @@ out["traced"] = estimates(model)
 os.environ["FWID_JAX_CACHE"] = str(cache)
 out["kept"] = estimates(model)
 out["files_after_kept"] = kept()
+out["again"] = estimates(model)  # this process's loaded program
+from fwid.estimate import _exported
+_exported._RUNNERS.clear()  # as a new process: read back from the file
 out["read"] = estimates(model)
 out["files_after_read"] = kept()
 
@@ -68,6 +71,7 @@ def test_kept_program_gives_the_traced_estimates(tmp_path):
     assert out["files_after_kept"]  # the full-R fit (and the diagonal one, if it fell back)
     assert out["files_after_read"] == out["files_after_kept"]  # read, not kept again
     np.testing.assert_allclose(out["kept"], traced, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(out["again"], traced, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(out["read"], traced, rtol=1e-12, atol=1e-14)
     assert out["files_after_user"] == out["files_after_kept"]  # the user's model: none kept
     np.testing.assert_allclose(out["user"], traced, rtol=1e-12, atol=1e-14)
