@@ -53,8 +53,8 @@ def in_band(model: Model, band: str) -> Model:
 
 class Engine:
     """Fits the baseline plus any model of `catalogue` effects to the `loads` of some units and
-    scores it on others. Designs and fits are cached, so forward selection and the two halves of
-    the cross-fit reuse each other's work."""
+    scores it on others. Designs, units' normal equations and fits are cached, so forward selection
+    and the folds of the cross-fit reuse each other's work."""
 
     def __init__(self, all_units: Sequence[Unit], loads: Sequence[str], catalogue=CATALOGUE):
         self.units = list(all_units)

@@ -250,8 +250,8 @@ def diagnose(
     trb_idx = tuple(range(n_tr + n_te, n_tr + n_te + n_trb))
     teb_idx = tuple(range(n_tr + n_te + n_trb, len(engine.units)))
     sigma2 = engine.mean_square(train_idx)
-    halves = cross_fit_folds(engine, n_tr + n_te, [p for p, _ in tr_par + te_par],
-                             n_tr + n_te, n_tr, folds)
+    halves = cross_fit_folds(engine, n_tr + n_te, [p for p, _ in tr_par + te_par], n_tr,
+                             folds)
 
     say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
         f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")

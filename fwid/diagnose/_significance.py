@@ -2,7 +2,8 @@
 
 The evidence is a **cross-fit**: the model with and without the candidate is fitted on the
 training flights and scored on the test flights, and fitted on the test flights and scored on
-the training flights. Every flight is cut into scoring blocks of about `BLOCK_S` seconds (its
+the training flights; with few flights, each of `FEW_FLIGHTS_FOLDS` groups of flights is scored
+by the model fitted on all the others (`cross_fit_folds`). Every flight is cut into scoring blocks of about `BLOCK_S` seconds (its
 trim load and Fourier coefficients re-estimated on each block, as the baseline does per
 flight), so a campaign of a few flights still gives tens of scores, and the many samples inside
 each flight count, while the residuals' colour (always present in reconstructed loads, Morelli
@@ -149,14 +150,15 @@ def evidence(engine: Engine, halves: list[Half], models: list[Model], effect: Ef
                     dict(zip(loads, before)), dict(zip(loads, after)))
 
 
-def cross_fit_folds(engine: Engine, n_flights: int, block_parents, first_block: int,
-                    n_train: int, folds: int | None = None) -> list[Half]:
+def cross_fit_folds(engine: Engine, n_flights: int, block_parents, n_train: int,
+                    folds: int | None = None) -> list[Half]:
     """The folds of the cross-fit: with 2, the training flights fitted and the test flights'
     blocks scored, and the other way round; with more, the flights (units `0..n_flights-1`,
     the first `n_train` the training ones) grouped round-robin into `folds` groups, in the
     order of (training/test, name, length), so that the order they were given in does not
     matter; each group's blocks are scored by the model fitted on all the other flights
-    (units `first_block + j` are blocks of flight `block_parents[j]`)."""
+    (the blocks follow the flights: unit `n_flights + j` is a block of flight
+    `block_parents[j]`)."""
     k = min(default_folds(n_flights) if folds is None else folds, n_flights)
     if k <= 2:
         groups = [tuple(range(n_train, n_flights)), tuple(range(n_train))]
@@ -167,6 +169,6 @@ def cross_fit_folds(engine: Engine, n_flights: int, block_parents, first_block: 
     out = []
     for g in groups:
         fit = tuple(i for i in range(n_flights) if i not in g)
-        score = tuple(first_block + j for j, p in enumerate(block_parents) if p in g)
+        score = tuple(n_flights + j for j, p in enumerate(block_parents) if p in g)
         out.append(Half(fit, score, engine.mean_square(fit)))
     return out

@@ -7,7 +7,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
@@ -71,9 +70,8 @@ def state_space(model: GreyBoxModel, consts: Mapping[str, float], params=None) -
     """Linearise `model` (its `f` and output equation `h`) at the trim, as
     [`fwid.eigenvalues`][] does: `A = df/dx`, `B = df/du`, `C = dh/dx`, `D = dh/du`."""
     p = model.params if params is None else {**model.params, **params}
-    c = {k: jnp.asarray(v, dtype=float) for k, v in consts.items()}
-    A, B = model.state_matrices(p, c)
-    C, D = model.output_matrices(p, c)
+    A, B = model.state_matrices(p, consts)  # both convert to float arrays (as_arrays)
+    C, D = model.output_matrices(p, consts)
     return StateSpace(*(np.asarray(M, dtype=float).reshape(shape) for M, shape in (
         (A, (len(model.states), len(model.states))), (B, (len(model.states), len(model.inputs))),
         (C, (len(model.outputs), len(model.states))),

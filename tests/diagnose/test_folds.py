@@ -22,7 +22,7 @@ def _folds(names, n_train, k, blocks_per_flight=3):
     n = len(names)
     parents = [f for f in range(n) for _ in range(blocks_per_flight)]
     eng = _Engine(names + [f"b{j}" for j in range(len(parents))])
-    return cross_fit_folds(eng, n, parents, n, n_train, k), parents
+    return cross_fit_folds(eng, n, parents, n_train, k), parents
 
 
 def test_every_block_scored_once_by_a_model_not_fitted_on_its_flight():
