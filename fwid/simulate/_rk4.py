@@ -16,7 +16,8 @@ def _axpy(a, x, y):
 class RK4(diffrax.AbstractSolver):
     """Classical RK4 with fixed steps, the integrator of the paper's estimator (Sec. IV.B).
 
-    Use with a fixed step size controller (`diffrax.StepTo` at the sample times).
+    fwid steps it by hand, one step per sample interval (`_simulate._solve_at_samples`);
+    with `diffrax.diffeqsolve` use a fixed step size controller (`diffrax.StepTo`).
 
     Written as a plain `diffrax.AbstractSolver` rather than a Butcher tableau: diffrax's
     general explicit Runge-Kutta machinery (stage buffers, the embedded error estimate, FSAL

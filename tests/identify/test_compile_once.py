@@ -63,6 +63,6 @@ def test_new_length_in_a_bucket_compiles_no_estimator(flights, other_length, cap
     a, b = (averaged(f[0], fwid.longitudinal()).n for f in (flights, other_length))
     assert a != b and bucket_length(a) == bucket_length(b)
     _compiles(caplog, run(flights))
-    heavy = ("_fit_each_batched", "_start_batch", "_force_dependence", "diffeqsolve")
+    heavy = ("_fit_each_batched", "_start_batch", "_force_dependence", "_solve_at_samples")
     again = _compiles(caplog, run(other_length))
     assert not [m for m in again if any(h in m for h in heavy)], again
