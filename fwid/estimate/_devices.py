@@ -15,6 +15,26 @@ def device_count() -> int:
     return len(jax.devices())
 
 
+#: Work [flop] at which jaxlib's CPU LAPACK kernels split a batch of small matrices over
+#: XLA's intra-op threads (`GetLapackBatchChunkSize` in jaxlib's `lapack_kernels.cc`).
+LAPACK_SPLIT_FLOPS = 200_000
+
+
+def flights_per_call(n_params: int) -> int | None:
+    """The most flights one batched call may fit per CPU device (`None`: no limit).
+
+    A batched LAPACK call of `B` matrices `p x p` costs about `B p^3`; from
+    `LAPACK_SPLIT_FLOPS` on, jaxlib hands the matrices to XLA's intra-op threads and blocks
+    the thread it runs on until they are done. When every device's program does so at once
+    (one CPU device per core, all pool threads blocked) nothing is left to do the work and
+    the process hangs: 128 flights of the 16-parameter model on this repository's 2-core
+    machine did (jax 0.10.2), in the 16 x 16 solves. Below the threshold the solves run where
+    they are called. Half the threshold, for a margin."""
+    if jax.default_backend() != "cpu":
+        return None
+    return max(1, (LAPACK_SPLIT_FLOPS // 2) // max(n_params, 1) ** 3)
+
+
 def padded_count(n_flights: int) -> int:
     """`n_flights` rounded up to a multiple of the device count, so that every device gets
     the same number of flights (the extra ones are copies whose results are dropped)."""

@@ -19,6 +19,7 @@ from ..simulate._experiment import Experiment, stack_experiments, with_measured_
 from ._devices import (
     device_count,
     flight_mesh,
+    flights_per_call,
     onto_mesh,
     padded_count,
     spans_processes,
@@ -166,13 +167,29 @@ def _fit_each_looped(model, experiments, *, names, progress, **kw) -> list[FitRe
 
 
 def _run_batched(model, exps, theta0s, diagonal, kw) -> list[dict]:
-    """The raw estimator output of each flight, fitted alone, in one batched call. Every
-    device gets the same number of flights: the batch is topped up with copies of the last
-    flight, whose results are dropped. Across processes (`_distributed.py`) each process
-    places its devices' share and gets every flight's output back."""
-    B = padded_count(len(exps))
-    fill = [exps[-1]] * (B - len(exps))
+    """The raw estimator output of each flight, fitted alone, in batched calls: all flights
+    at once, or, on CPU, in as few calls as keep to `flights_per_call` flights per device
+    (larger batches of small LAPACK solves can hang jaxlib, see there), all of one shape so
+    that one compiled program serves them."""
     n = bucket_length(max(e.n for e in exps))  # a few lengths: a new one rarely compiles
+    per = flights_per_call(np.asarray(theta0s[0]).shape[-1])
+    per = None if per is None else per * device_count()
+    if per is None or len(exps) <= per:
+        return _run_call(model, exps, theta0s, diagonal, kw, n, padded_count(len(exps)))
+    calls = -(-len(exps) // per)
+    size = padded_count(-(-len(exps) // calls))  # balanced: as few copies as possible
+    out = []
+    for i in range(0, len(exps), size):
+        out += _run_call(model, exps[i:i + size], theta0s[i:i + size], diagonal, kw, n, size)
+    return out
+
+
+def _run_call(model, exps, theta0s, diagonal, kw, n, B) -> list[dict]:
+    """One batched call on `B` flights of `n` samples. Every device gets the same number of
+    flights: the batch is topped up with copies of the last flight, whose results are
+    dropped. Across processes (`_distributed.py`) each process places its devices' share
+    and gets every flight's output back."""
+    fill = [exps[-1]] * (B - len(exps))
     stacked = jax.tree.map(lambda a: a[:, None], stack_experiments(exps + fill, n))
     th = jnp.asarray(np.stack([np.asarray(t) for t in list(theta0s) + list(theta0s[-1:]) * len(fill)]))
     mesh = flight_mesh(B)  # over every process's devices after initialize_distributed

@@ -49,3 +49,37 @@ def test_spread_fit_equals_one_device(monkeypatch, lon_flight):
     plain = fwid.fit_each(fwid.longitudinal(), exps)
     for a, b in zip(spread, plain):
         np.testing.assert_allclose(np.asarray(a.theta), np.asarray(b.theta), rtol=1e-12)
+
+
+@pytest.mark.parametrize("params, per", [(16, 24), (30, 3), (60, 1), (4, 1562)])
+def test_flights_per_call_keeps_lapack_batches_below_the_split(params, per):
+    """Batched p x p solves of `per` flights cost below half of jaxlib's split threshold
+    (beyond which 128 flights of 16 parameters on 2 CPU devices hung), and at least one
+    flight is always allowed."""
+    if jax.default_backend() != "cpu":
+        assert _devices.flights_per_call(params) is None
+        return
+    got = _devices.flights_per_call(params)
+    assert got == per
+    assert got == 1 or got * params ** 3 <= _devices.LAPACK_SPLIT_FLOPS // 2
+
+
+def test_fit_in_several_calls_equals_one_call(monkeypatch, lon_flight):
+    """Five flights fitted in balanced calls of at most one flight per device (as many
+    flights would be) give the estimates of the single call to 1e-12, in the flights'
+    order."""
+    import fwid.estimate._each as oe
+
+    rng = np.random.default_rng(1)
+    exps = [lon_flight.experiment(lon_flight.ys + 1e-3 * rng.normal(size=lon_flight.ys.shape))
+            for _ in range(5)]
+    model = fwid.longitudinal()
+    one = fwid.fit_each(model, exps)
+    calls = []
+    run_call = oe._run_call
+    monkeypatch.setattr(oe, "flights_per_call", lambda p: 1)
+    monkeypatch.setattr(oe, "_run_call", lambda *a: calls.append(len(a[1])) or run_call(*a))
+    several = fwid.fit_each(model, exps)
+    assert len(calls) >= 2 and sum(calls) == 5
+    for a, b in zip(one, several):
+        np.testing.assert_allclose(np.asarray(a.theta), np.asarray(b.theta), rtol=1e-12)
