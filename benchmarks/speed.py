@@ -216,9 +216,26 @@ def run(args):
             r["agreement"] = dict(max_rel_diff_aero=0.0, max_diff_in_std_aero=0.0,
                                   note="the fwid reference itself")
 
+    # ---- the head-to-head, round-robin: both calls see the same load ----
+    log(f"fwid.fit against the JAX reference (jit), {args.rounds} rounds round-robin")
+    hh = {"fwid.fit": [], "reference": []}
+    calls = {"fwid.fit": lambda: B.fwid_fit(0), "reference": lambda: block(fit_one(*a1))}
+    for _ in range(args.rounds):
+        for k, f in calls.items():
+            t0 = time.perf_counter()
+            f()
+            hh[k].append(time.perf_counter() - t0)
+    head_to_head = {k: dict(median_s=statistics.median(v), min_s=min(v)) for k, v in hh.items()}
+    head_to_head["rounds"] = args.rounds
+    head_to_head["ratio_median"] = (head_to_head["fwid.fit"]["median_s"]
+                                    / head_to_head["reference"]["median_s"])
+    head_to_head["ratio_min"] = (head_to_head["fwid.fit"]["min_s"]
+                                 / head_to_head["reference"]["min_s"])
+
     profile = run_profile(B, rows[0]["warm_s"]) if args.profile else None
     problem = dict(**problem, sizes=sizes, **B.settings())
     return dict(machine=machine(load0), problem=problem, rows=rows, profile=profile,
+                head_to_head=head_to_head,
                 quick=args.quick, repeats=dict(fwid=args.fwid_repeats,
                                                fwid_batched=args.fwid_batch_repeats,
                                                ref=args.ref_repeats,
@@ -300,6 +317,14 @@ def markdown(res):
                   f"{f1['warm_min_s'] / j1['warm_min_s']:.2f}x min (target <= 2x); fwid.fit "
                   f"warm speed-up over scipy {f1['speedup_vs_scipy']:.0f}x (target >= 50x); "
                   f"fwid.fit compile {f1['compile_s']:.1f} s (target < 30 s)."]
+    hh = res.get("head_to_head")
+    if hh:
+        lines += ["", f"Head to head, {hh['rounds']} rounds round-robin (both calls see the same "
+                  f"load; the steadier ratio on a shared machine): fwid.fit "
+                  f"{hh['fwid.fit']['median_s']:.4f} s median ({hh['fwid.fit']['min_s']:.4f} min), "
+                  f"hand-written JAX {hh['reference']['median_s']:.4f} s "
+                  f"({hh['reference']['min_s']:.4f}): **{hh['ratio_median']:.2f}x median, "
+                  f"{hh['ratio_min']:.2f}x min** (issue 14 target: within 2x in every run)."]
     lines += ["", "Batch scaling, warm time for N flights / warm time for 1 flight (fwid: the "
               "batched call over fwid.fit on one flight):", ""]
     by = {(r["method"], r["n_flights"]): r["warm_s"] for r in res["rows"]}
@@ -340,6 +365,8 @@ def main(argv=None):
     ap.add_argument("--start", choices=("true1.2", "least-squares"), default="true1.2",
                     help="start values: true x 1.2, or fwid's least-squares start per flight")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--rounds", type=int, default=30,
+                    help="rounds of the round-robin head-to-head of fwid.fit and the reference")
     ap.add_argument("--repeats", type=int, default=3, help="warm repeats (>= 3)")
     ap.add_argument("--scipy-flights", type=int, default=4,
                     help="flights the scipy loop is timed on (more are extrapolated)")
