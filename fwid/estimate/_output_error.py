@@ -162,7 +162,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
 
     Pure and jit/vmap-able: one `optimistix.least_squares` solve with [`RelaxedGaussNewton`][]
     (R relaxed by Eq. 11 at every Gauss-Newton step, the step halved on the likelihood of
-    Eq. 10). Each step's residuals and their Jacobian come from one diffrax solve of the
+    Eq. 10). Each step's residuals and their Jacobian come from one RK4 solve of the
     state with its forward sensitivities ([`simulate_sensitivities`][], equal to
     `jax.jacfwd` through the RK4 simulation), handed to optimistix as the derivative of the
     residual function ([`jacobian_once`][]). The uncertainty is computed from the Jacobian

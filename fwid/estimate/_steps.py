@@ -1,9 +1,9 @@
 """One classical RK4 step between two samples, for the estimators that restart the
 integration at every sample (filter error) or every few samples (multiple shooting).
 
-The same numbers as [`fwid.simulate`][] (classical RK4 at the data's step, Sec. IV.B, with the
-input linearly interpolated: its mean at the half step), written as a plain function for
-`lax.scan`: it compiles in a fraction of the time of a diffrax solve.
+The step of [`fwid.simulate`][] (classical RK4 at the data's step, Sec. IV.B, with the input
+linearly interpolated: its mean at the half step), `fwid.RK4` stepped by hand
+(`simulate._rk4.step_interval`), in the signature of the models' `f(x, u, params, consts)`.
 """
 
 from __future__ import annotations
@@ -11,16 +11,13 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from ..simulate._rk4 import step_interval
+
 
 def rk4_step(f, x, u0, u1, dt, params, consts):
     """`x(t + dt)` from `x(t)` for `x' = f(x, u, params, consts)`, `u` linear from `u0` to
     `u1` over the step."""
-    um = 0.5 * (u0 + u1)
-    k1 = f(x, u0, params, consts)
-    k2 = f(x + 0.5 * dt * k1, um, params, consts)
-    k3 = f(x + 0.5 * dt * k2, um, params, consts)
-    k4 = f(x + dt * k3, u1, params, consts)
-    return x + dt / 6.0 * (k1 + 2.0 * (k2 + k3) + k4)
+    return step_interval(lambda x_, u, a: f(x_, u, *a), x, 0.0, dt, u0, u1, (params, consts))
 
 
 def rk4_trajectory(f, x0, u, dt, params, consts):

@@ -56,3 +56,25 @@ class RK4(diffrax.AbstractSolver):
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)
+
+
+def interval_field(f: Callable):
+    """`f(x, u, args)` as a diffrax vector field on one sample interval: its `args` are the
+    interval `(ta, tb, ua, ub, args)`, the input linearly interpolated between the interval's
+    two samples (what [`fwid.input_at`][] gives there, without indexing the whole record)."""
+
+    def vector_field(tau, x, interval):
+        ta, tb, ua, ub, args = interval
+        w = (tau - ta) / (tb - ta)
+        return f(x, ua + w * (ub - ua), args)
+
+    return vector_field
+
+
+def step_interval(f: Callable, y, ta, tb, ua, ub, args=None):
+    """One [`RK4`][] step of `y' = f(y, u, args)` from `ta` to `tb`, the input linear from
+    `ua` to `ub` (its mean at the half step): the step of every fwid simulation, stepped by
+    hand (diffrax's "step manually" use of a solver; `RK4` keeps no solver state)."""
+    term = diffrax.ODETerm(interval_field(f))
+    y1, _, _, _, _ = RK4().step(term, ta, tb, y, (ta, tb, ua, ub, args), None, False)
+    return y1
