@@ -78,6 +78,22 @@ def warm_times(fn, *a, repeats=15):
     return statistics.median(ts), min(ts)
 
 
+def interleaved(calls: dict, rounds: int) -> dict:
+    """Every call of `calls` (name -> no-argument function) once per round, round-robin, so
+    that all see the same load, after one warm-up call each: per name the median, the
+    minimum and every time [s]."""
+    for f in calls.values():
+        f()
+    times = {k: [] for k in calls}
+    for _ in range(rounds):
+        for k, f in calls.items():
+            t0 = time.perf_counter()
+            f()
+            times[k].append(time.perf_counter() - t0)
+    return {k: dict(median_s=statistics.median(v), min_s=min(v), all_s=v)
+            for k, v in times.items()}
+
+
 def aot(fn, *a):
     """`jax.jit(fn)` compiled ahead of time for `a`: (compiled, trace+lower s, compile s)."""
     t0 = time.perf_counter()

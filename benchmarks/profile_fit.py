@@ -96,15 +96,7 @@ def run_profile(B, fit_warm_s=None):
              "JAX reference jit (N=1)": lambda: M.block(fit_one(*a1)),
              f"{B.batched_label} (N={nb})": fbc,
              f"JAX reference vmap (N={nb})": lambda: M.block(fit_many(*ar))}
-    for f in calls.values():  # compiled already by speed.py's tables, if it ran them
-        f()
-    times = {k: [] for k in calls}
-    for _ in range(15):
-        for k, f in calls.items():
-            t0 = time.perf_counter()
-            f()
-            times[k].append(time.perf_counter() - t0)
-    il = {k: dict(median_s=statistics.median(v), min_s=min(v), all_s=v) for k, v in times.items()}
+    il = M.interleaved(calls, 15)  # compiled already by speed.py's tables, if it ran them
     names = list(calls)
     il["ratios"] = {
         "fwid.fit / reference (N=1)": dict(

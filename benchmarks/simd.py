@@ -61,19 +61,6 @@ def _flops(fn, *a) -> float:
     return float(ca.get("flops", float("nan")))
 
 
-def _interleaved(calls: dict, rounds: int) -> dict:
-    """Every call once per round, round-robin (so all see the same load): min and median."""
-    for f in calls.values():
-        f()
-    times = {k: [] for k in calls}
-    for _ in range(rounds):
-        for k, f in calls.items():
-            t0 = time.perf_counter()
-            f()
-            times[k].append(time.perf_counter() - t0)
-    return {k: dict(min_s=min(v), median_s=statistics.median(v)) for k, v in times.items()}
-
-
 def inner_field(c):
     """The state and its 16 sensitivities' derivative, flights innermost: `y` `(17, 4, N)`,
     `th` `(16, N)`, `uk` `(1, N)`, every constant `(N,)`."""
@@ -169,7 +156,7 @@ def run(args) -> dict:
             inner_kernel(th_i, x0_i, u_i, c_n)),
     }
     print(f"kernels: {n} flights, {args.rounds} rounds round-robin", flush=True)
-    kernels = _interleaved(calls, args.rounds)
+    kernels = M.interleaved(calls, args.rounds)
 
     # --- the arithmetic --------------------------------------------------------------------
     steps = P.N_SAMPLES - 1
@@ -196,7 +183,7 @@ def run(args) -> dict:
     a = jax.random.normal(jax.random.key(0), (1024, 1024), dtype=jnp.float64)
     mm = jax.jit(lambda x: x @ x)
     a = put(a)
-    pk = _interleaved({"mm": lambda: jax.block_until_ready(mm(a))}, 10)["mm"]
+    pk = M.interleaved({"mm": lambda: jax.block_until_ready(mm(a))}, 10)["mm"]
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     # XLA's CPU matrix product runs on every core (its own thread pool), even on one device
     peak = dict(matmul_min_s=pk["min_s"], gflops=2.0 * 1024 ** 3 / pk["min_s"] / 1e9,

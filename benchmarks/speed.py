@@ -62,6 +62,7 @@ from _problem import setup  # noqa: E402  (first: imports fwid, float64 on)
 
 from _measure import (  # noqa: E402
     block,
+    interleaved,
     machine,
     machine_line,
     print_backend,
@@ -218,14 +219,8 @@ def run(args):
 
     # ---- the head-to-head, round-robin: both calls see the same load ----
     log(f"fwid.fit against the JAX reference (jit), {args.rounds} rounds round-robin")
-    hh = {"fwid.fit": [], "reference": []}
-    calls = {"fwid.fit": lambda: B.fwid_fit(0), "reference": lambda: block(fit_one(*a1))}
-    for _ in range(args.rounds):
-        for k, f in calls.items():
-            t0 = time.perf_counter()
-            f()
-            hh[k].append(time.perf_counter() - t0)
-    head_to_head = {k: dict(median_s=statistics.median(v), min_s=min(v)) for k, v in hh.items()}
+    head_to_head = interleaved({"fwid.fit": lambda: B.fwid_fit(0),
+                                "reference": lambda: block(fit_one(*a1))}, args.rounds)
     head_to_head["rounds"] = args.rounds
     head_to_head["ratio_median"] = (head_to_head["fwid.fit"]["median_s"]
                                     / head_to_head["reference"]["median_s"])

@@ -37,9 +37,9 @@ import numpy as np
 
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment
+from ..simulate._simulate import simulate
 from ._gauss_newton import ml_cost, noise_covariance
 from ._noise import check_noise, fall_back
-from ._steps import rk4_trajectory
 from ._uncertainty import correlation, lag1_autocorrelation
 from ._warnings import fit_warnings, issue
 
@@ -112,8 +112,7 @@ def _residuals(model: GreyBoxModel, vec, seg: _Segments):
     def one(e, idx):
         x0 = jnp.where(idx >= 0, jax.lax.dynamic_slice(
             jnp.concatenate([states, jnp.zeros(nx)]), (jnp.maximum(idx, 0),), (nx,)), e.x0)
-        xs = rk4_trajectory(model.f, x0, e.u, e.t[1] - e.t[0], params, e.consts)
-        ys = jax.vmap(lambda x, u: model.h(x, u, params, e.consts))(xs, e.u)
+        xs, ys = simulate(model, e, params, x0=x0)
         return (e.z - ys) * e.mask[:, None], xs[-1], x0
 
     v, xend, x0s = jax.vmap(one)(seg.exp, seg.free_start)
