@@ -103,6 +103,15 @@ def pairs(results) -> list[str]:
         lines.append(f"| {r['effect']} | {r['form']} | {r['axis']} | {r['verdict']} | "
                      f"{', '.join(r.get('effects') or []) or '-'} | {'yes' if right(r) else 'no'} |")
     lines.append(f"\nBoth named: {_frac(rows)}.")
+    # an actuator delay or lag and a late log of the same deflection are one net shift of it
+    shift = {"actuator-dynamics", "time-offset"}
+    rest = [r for r in rows if set(r["effect"].split("+")) != shift]
+    lines.append(f"Without `actuator-dynamics+time-offset` (both act as one shift of the same "
+                 f"deflection): {_frac(rest)}.")
+    lines += ["", "| effect | pairs with it | both named |", "|---|---:|---:|"]
+    for e in sorted({x for r in rows for x in r["effect"].split("+")}):
+        with_e = [r for r in rows if e in r["effect"].split("+")]
+        lines.append(f"| {e} | {len(with_e)} | {sum(right(r) for r in with_e)} |")
     return lines
 
 

@@ -175,7 +175,7 @@ def run_case(case: dict) -> dict:
     if u:
         rec["unexplained"] = {k: u.get(k) for k in ("probe", "drivers", "test_shrink_pct", "p",
                                                     "redness_after")}
-    for k in ("disturbance", "first_round"):
+    for k in ("disturbance", "first_round", "rounds"):
         if getattr(diag, k, None) is not None:
             rec[k] = getattr(diag, k)
     return rec

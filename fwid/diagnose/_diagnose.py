@@ -33,8 +33,10 @@ class Diagnosis:
     `_process_noise.py`; `None` otherwise), `candidates` (the catalogue, ranked, best first, CONTRACTS section 3), `probes`
     (the same for the structure outside the catalogue, `_probes.py`), `unexplained` (what the
     first probe selected says: drivers and shrink; `None` when no probe is selected),
-    `localisation` (the gap map of the baseline on the test flights), and the held-out load
-    residuals before (`residuals`) and after each candidate or probe (`augmented[name]`), by
+    `localisation` (the gap map of the baseline on the test flights), `rounds` (the forward
+    selection's trace: per round its per-candidate level, every candidate's `p`, `t`,
+    `gain_pct` and `blocks`, and the effect it `added`, `None` in the round that stopped; why
+    a candidate was or was not added), and the held-out load residuals before (`residuals`) and after each candidate or probe (`augmented[name]`), by
     test flight and load, for figures."""
 
     axis: str
@@ -52,6 +54,7 @@ class Diagnosis:
     unexplained: dict | None = None
     disturbance: dict | None = None
     first_round: dict = dataclasses.field(default_factory=dict, repr=False)
+    rounds: list[dict] = dataclasses.field(default_factory=list, repr=False)
     simulation: dict | None = None
     process_noise: dict | None = None
     models: SimulationGap | None = dataclasses.field(default=None, repr=False)
@@ -89,6 +92,7 @@ class Diagnosis:
             "simulation": self.simulation,
             "localisation": self.localisation,
             "first_round": self.first_round,
+            "rounds": self.rounds,
             "method": self.settings,
         }
 
@@ -425,6 +429,10 @@ def diagnose(
         models=sim,
         first_round={k: {"p": ev.p, "gain_pct": 100.0 * ev.gain, "t": ev.t}
                      for k, ev in sel.first.items()},
+        rounds=[{"level": lv, "added": added,
+                 "candidates": {k: {"p": ev.p, "t": ev.t, "gain_pct": 100.0 * ev.gain,
+                                    "blocks": ev.n} for k, ev in evs.items()}}
+                for lv, evs, added in sel.rounds],
         localisation=localisation,
         residuals=before,
         augmented=augmented,

@@ -131,6 +131,17 @@ def test_report_follows_the_contract(effect_flights):
                 "test_rms_after", "p", "confidence", "detection_limit_pct"} <= set(c)
         assert 0.0 <= c["p"] <= 1.0 and 0.0 <= c["confidence"] <= 1.0
         assert c["effect"] in EFFECT_NAMES
+    # the selection's trace: what each round added, at alpha / candidates in play, and why
+    rounds = rep["rounds"]
+    added = [r["added"] for r in rounds if r["added"] is not None]
+    assert added[0] == "flap-coupling"
+    assert [e["effect"] for e in rep["effects"]] == [a for a in added if a in EFFECT_NAMES]
+    for r in rounds:
+        assert r["level"] == pytest.approx(rep["method"]["alpha"] / len(r["candidates"]))
+        for name, c in r["candidates"].items():
+            assert (name == r["added"]) <= (c["p"] < r["level"]), (name, c)
+    assert rounds[0]["candidates"]["flap-coupling"]["p"] == pytest.approx(
+        rep["first_round"]["flap-coupling"]["p"])
     loc = rep["localisation"]
     assert {"by_output", "by_band", "by_time", "by_state"} <= set(loc)
     for ld, bands in loc["by_band"].items():

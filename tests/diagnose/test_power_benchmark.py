@@ -1,0 +1,43 @@
+"""A fast slice of `benchmarks/diagnosis_power.py`: its split cannot leak, its cases run blind
+through `fwid diagnose`, and its summary counts them (issue 12)."""
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+
+import diagnosis_power as dp  # noqa: E402
+from _power_summary import summarise  # noqa: E402
+
+
+def test_halves_share_no_form_and_no_seed():
+    dev, held = dp.cases("dev"), dp.cases("heldout")
+    for kind in ("single", "pair"):
+        forms = [{(c["effect"], c["form"]) for c in cs if c["kind"] == kind} for cs in (dev, held)]
+        assert forms[0] and forms[1] and not forms[0] & forms[1]
+    assert not {c["seed"] for c in dev} & {c["seed"] for c in held}
+    # more seeds add cases and keep the first ones as they were
+    more = dp.cases("heldout", seeds=3)
+    assert len(more) > len(held) and all(c in more for c in held)
+
+
+def test_slice_runs_blind_and_is_summarised(tmp_path):
+    cases = dp.cases("dev")
+    pick = [next(c for c in cases if c["kind"] == "single" and c["n"] == 4
+                 and c["effect"] == "lon-lat-coupling" and c["strength"] == 2.0
+                 and c["form"] == "control" and c["seed"] == 2),
+            next(c for c in cases if c["kind"] == "clean" and c["n"] == 4 and c["seed"] == 2
+                 and c["rep"] == 0)]
+    recs = [dp.run_case(dict(c)) for c in pick]
+    assert [r.get("verdict") for r in recs] == ["lon-lat-coupling", "none"], recs
+    hit = recs[0]
+    assert hit["effects"][0] == "lon-lat-coupling"
+    trace = hit["rounds"]
+    assert trace[0]["added"] == "lon-lat-coupling" and trace[-1]["added"] is None
+    assert trace[0]["candidates"]["lon-lat-coupling"]["p"] < trace[0]["level"]
+    text = summarise(recs, tmp_path / "slice")
+    assert "| lon-lat-coupling | 4+4 | 1/1 | 1/1 |" in text
+    assert "| none | 4+4 | 0 | 1 | 1 | none 1 |" in text
+    assert (tmp_path / "slice.png").stat().st_size > 0
+    json.dumps(recs)  # the records are what the .jsonl holds
