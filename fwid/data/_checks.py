@@ -202,9 +202,10 @@ def check_length(name: str, t: Float[ArrayLike, " n"]) -> None:
         )
 
 
-def check_units(name: str, columns: Mapping[str, ArrayLike]) -> None:
+def check_units(name: str, columns: Mapping[str, ArrayLike], t: ArrayLike | None = None) -> None:
     """Angles, rates and deflections are in radians, not degrees (see `DEGREE_LIMITS`); every
-    column that looks like degrees is named in the one message."""
+    column that looks like degrees is named in the one message (with `t`, the time the values
+    leave the plausible range when they start plausible, as radians that diverged do)."""
     found = []
     for col, limit in DEGREE_LIMITS.items():
         if col not in columns:
@@ -212,25 +213,39 @@ def check_units(name: str, columns: Mapping[str, ArrayLike]) -> None:
         x = np.asarray(columns[col], dtype=float)
         if x.size == 0:
             continue
-        m = float(np.max(np.abs(x)))
-        if m > limit * (1 + 1e-6):
-            found.append((col, m, limit))
+        over = np.abs(x) > limit * (1 + 1e-6)
+        if over.any():
+            found.append((col, float(np.max(np.abs(x))), limit, int(np.argmax(over))))
     if not found:
         return
     fix = "multiply by pi/180"
-    if any(col == "psi" for col, _, _ in found):
+    if any(col == "psi" for col, _, _, _ in found):
         fix += " (or, for an unwrapped heading in radians, subtract a multiple of 2*pi)"
     if len(found) == 1:
-        col, m, limit = found[0]
+        col, m, limit, _ = found[0]
         rate = col in ("p", "q", "r")
         raise FlightDataError(
             f"{name}: column '{col}' looks like {'deg/s' if rate else 'degrees'} "
             f"(max |{col}| = {m:.4g}, above the {limit:.3g} {'rad/s' if rate else 'rad'} "
             f"plausible); fwid expects {'rad/s' if rate else 'radians'}: {fix}"
+            + _left_range(columns, found, t)
         )
-    cols = ", ".join(f"'{c}' (max {m:.4g}, plausible {lim:.3g})" for c, m, lim in found)
+    cols = ", ".join(f"'{c}' (max {m:.4g}, plausible {lim:.3g})" for c, m, lim, _ in found)
     raise FlightDataError(f"{name}: columns {cols} look like degrees or deg/s; fwid expects "
-                          f"radians and rad/s: {fix} in each")
+                          f"radians and rad/s: {fix} in each" + _left_range(columns, found, t))
+
+
+def _left_range(columns: Mapping[str, ArrayLike], found: list, t: ArrayLike | None) -> str:
+    """When the implausible values start only after a plausible first tenth of the flight, the
+    columns may be radians of a flight that tumbled or a simulation that diverged: say when."""
+    x = np.asarray(columns[found[0][0]], dtype=float)
+    first = min(k for _, _, _, k in found)
+    if first < max(1, x.size // 10):
+        return ""
+    when = (f"t = {float(np.asarray(t, dtype=float)[first]):.4g} s" if t is not None
+            else f"sample {first}")
+    return (f"; or, if they are radians, the flight leaves the plausible range at {when} (a "
+            "vehicle that tumbled or a simulation that diverged): keep the part before it")
 
 
 def check_frequency(name: str, f: Float[ArrayLike, " n"], t=None, lines=None) -> None:
@@ -277,7 +292,7 @@ def check_flight(
     check_all_finite(name, {c: columns[c] for c in strict}, t, lines)
     dt = check_time(name, t, lines)
     check_length(name, t)
-    check_units(name, {c: columns[c] for c in strict})
+    check_units(name, {c: columns[c] for c in strict}, t)
     if "f" in columns:
         check_frequency(name, columns["f"], t, lines)
     return dt

@@ -6,7 +6,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ._signals import AXIS_INPUT, AXIS_STATES, Signals
+from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, Signals
 
 #: Half-width [Hz] of a harmonic's own band, before the spread of the flapping frequency.
 HARMONIC_HALF_WIDTH = 0.6
@@ -76,7 +76,9 @@ def gap_map(
     """The gap map of CONTRACTS' `localisation` from held-out residuals (full band, by load).
 
     - `by_output[load]`: `rms`, `unexplained_pct` (residual variance over the measured
-      variance, i.e. 1 - R^2), and `share_pct` (its share of the sum over loads).
+      variance, i.e. 1 - R^2), and `share_pct` (its share of the sum over the axis's loads; 0
+      for a load of the other axis, marked `other_axis`: with that axis quiet it is about all
+      noise, and would crowd out the axis's own gap).
     - `by_band[load]`: per cent of the residual energy in each of `BAND_NAMES`.
     - `by_time[load]`: RMS in the steady start and in the manoeuvre, in the `AFTER_INPUT`
       window after input events and elsewhere, and per flap cycle (median, 90th percentile,
@@ -101,9 +103,12 @@ def gap_map(
         out["by_band"][ld] = {b: _pct(e, energy.sum()) for b, e in zip(BAND_NAMES, energy)}
         out["by_time"][ld] = _by_time(sigs, r, axis)
         out["by_state"][ld] = _by_state(sigs, r, states)
-    total = sum(unexplained.values())
+    own = [ld for ld in loads if ld in AXIS_LOADS[axis]] or loads
+    total = sum(unexplained[ld] for ld in own)
     for ld in loads:
-        out["by_output"][ld]["share_pct"] = _pct(unexplained[ld], total)
+        out["by_output"][ld]["share_pct"] = _pct(unexplained[ld], total) if ld in own else 0.0
+        if ld not in own:
+            out["by_output"][ld]["other_axis"] = True
     return out
 
 

@@ -363,3 +363,17 @@ def test_every_degree_column_named_at_once():
     msg = str(info.value)
     assert msg.startswith("lon_0.csv: columns ") and "'theta' (max 71.3" in msg
     assert "'q' (max 120" in msg and msg.endswith("multiply by pi/180 in each")
+
+
+def test_radians_that_diverge_are_told_apart_from_degrees():
+    # a simulation that diverged: plausible radians first, then past pi; the message still
+    # offers the degrees fix, and says when the flight leaves the plausible range
+    t = np.arange(400) * 0.005
+    theta = 0.3 * np.exp(np.maximum(t - 1.0, 0.0) * 4.0)
+    with pytest.raises(FlightDataError) as info:
+        check_flight("lon_0.csv", t, {"theta": theta})
+    msg = str(info.value)
+    first = float(t[np.argmax(np.abs(theta) > np.pi)])
+    assert msg.startswith("lon_0.csv: column 'theta' looks like degrees")
+    assert f"the flight leaves the plausible range at t = {first:.4g} s" in msg
+    assert "diverged" in msg

@@ -148,6 +148,10 @@ def test_report_follows_the_contract(effect_flights):
         assert set(bands) == set(BAND_NAMES)
         assert sum(bands.values()) == pytest.approx(100.0)
     assert sum(v["share_pct"] for v in loc["by_output"].values()) == pytest.approx(100.0)
+    # the shares are the axis's: a quiet other axis's loads (noise) do not crowd them out
+    assert sum(loc["by_output"][ld]["share_pct"] for ld in ("X", "Z", "M")) == pytest.approx(100.0)
+    for ld in set(loc["by_output"]) - {"X", "Z", "M"}:
+        assert loc["by_output"][ld]["share_pct"] == 0.0 and loc["by_output"][ld]["other_axis"]
     # flapping modulated by the motion: its gap lives in the sidebands of the harmonics
     for ld in ("X", "Z", "M"):
         side = sum(loc["by_band"][ld][f"sidebands_{n}"] for n in (1, 2, 3))
