@@ -13,7 +13,7 @@ from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units
 from ._catalogue import CATALOGUE, Effect
-from ._disturbance import RED_MIN, colour, spectrum
+from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES
 from ._process_noise import process_noise as fit_process_noise
@@ -364,6 +364,7 @@ def diagnose(
         prev = now
         if e.rates and not effects and unexplained is None:
             row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
+            row["shortest_lag"] = model[-1][1] == min(e.variants)
         if e.name in named and unexplained is None:
             effects.append(row)
             in_sim.append((e.name, model[-1][1]))
@@ -385,13 +386,14 @@ def diagnose(
     proxy = None
     if verdict == "unexplained" and unexplained["redness_after"] >= RED_MIN:
         verdict = "random-disturbance"
-    elif effects and effects[0].get("redness_after", 0.0) >= RED_MIN:
-        # an entry built on states' rates that leaves the residual red tracked a disturbance
+    elif effects and rates_proxy(effects[0], disturbance):
+        # an entry built on states' rates that leaves the residual red, or that takes its
+        # shortest lag (a rate) on a red residual, tracked a disturbance
         proxy, effects, in_sim = effects[0], [], []
         verdict = "random-disturbance"
         unexplained = None  # what entered after a proxy of the disturbance tracks it too
         disturbance["proxy"] = {k: proxy[k] for k in ("effect", "variant", "p", "shrink_pct",
-                                                       "redness_after")}
+                                                       "redness_after", "shortest_lag")}
     elif verdict == "none" and disturbance["redness"] >= RED_MIN:
         verdict = "random-disturbance"
     if verdict == "unexplained":

@@ -68,9 +68,11 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      f"make it; cycle-averaged residual RMS {size}; a filter-error fit models it")
         if dist.get("proxy"):
             px = dist["proxy"]
-            lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but left the "
-                         f"residual red ({px['redness_after']:.1f}): it tracked the disturbance "
-                         "through the states' rates, so it is not named)")
+            why = (f"left the residual red ({px['redness_after']:.1f})"
+                   if px["redness_after"] >= dist["red_min"] else
+                   f"took its shortest lag ({px['variant']}), a state's rate, on a red residual")
+            lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
+                         "tracked the disturbance through the states' rates, so it is not named)")
         if d.process_noise is not None:
             lines.append("  " + _process_noise_line(d.process_noise))
     elif d.verdict == "unexplained":

@@ -131,3 +131,16 @@ def test_a_load_that_follows_the_attitude_is_unexplained_with_theta_first(effect
     assert d.verdict not in EFFECT_NAMES
     assert d.unexplained["drivers"][0]["signal"] == "theta"
     assert "M" in d.unexplained["affected"]
+
+
+def test_a_rates_entry_at_its_shortest_lag_on_a_red_residual_is_a_proxy():
+    from fwid.diagnose._disturbance import RED_MIN, rates_proxy
+
+    red, white = {"redness": 2 * RED_MIN}, {"redness": 0.5 * RED_MIN}
+    # leaves the residual red: a proxy whatever its lag
+    assert rates_proxy({"redness_after": RED_MIN, "shortest_lag": False}, white)
+    # whitens a red residual with a state's rate (its shortest lag): a proxy
+    assert rates_proxy({"redness_after": 1.0, "shortest_lag": True}, red)
+    # a longer lag on a red residual, or the shortest on a white one: structure
+    assert not rates_proxy({"redness_after": 1.0, "shortest_lag": False}, red)
+    assert not rates_proxy({"redness_after": 1.0, "shortest_lag": True}, white)
