@@ -36,8 +36,9 @@ class Diagnosis:
     `localisation` (the gap map of the baseline on the test flights), `rounds` (the forward
     selection's trace: per round its per-candidate level, every candidate's `p`, `t`,
     `gain_pct` and `blocks`, and the effect it `added`, `None` in the round that stopped; why
-    a candidate was or was not added), and the held-out load residuals before (`residuals`) and after each candidate or probe (`augmented[name]`), by
-    test flight and load, for figures."""
+    a candidate was or was not added), and the held-out load residuals before (`residuals`)
+    and after each candidate or probe (`augmented[name]`), by test flight and load, for
+    figures."""
 
     axis: str
     train: list[str]
@@ -412,6 +413,10 @@ def diagnose(
         sim = simulation_gap(train, test, axis, in_sim, cutoff)
 
     say("mapping the gap")
+    rounds = [{"level": lv, "added": added,
+               "candidates": {k: {"p": ev.p, "t": ev.t, "gain_pct": 100.0 * ev.gain,
+                                  "blocks": ev.n} for k, ev in evs.items()}}
+              for lv, evs, added in sel.rounds]
     measured = [{ld: s.loads["averaged"][ld] + s.loads["flapping"][ld] for ld in loads}
                 for s in te_sig]
     localisation = gap_map(te_sig, before, measured, axis)
@@ -429,12 +434,9 @@ def diagnose(
         simulation=sim.summary if sim is not None else None,
         process_noise=noise_block,
         models=sim,
-        first_round={k: {"p": ev.p, "gain_pct": 100.0 * ev.gain, "t": ev.t}
-                     for k, ev in sel.first.items()},
-        rounds=[{"level": lv, "added": added,
-                 "candidates": {k: {"p": ev.p, "t": ev.t, "gain_pct": 100.0 * ev.gain,
-                                    "blocks": ev.n} for k, ev in evs.items()}}
-                for lv, evs, added in sel.rounds],
+        first_round={k: {x: c[x] for x in ("p", "gain_pct", "t")}
+                     for k, c in (rounds[0]["candidates"] if rounds else {}).items()},
+        rounds=rounds,
         localisation=localisation,
         residuals=before,
         augmented=augmented,

@@ -22,6 +22,7 @@ not there).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
 
 from ._attribution import Engine, Model
@@ -61,19 +62,28 @@ def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
 @dataclasses.dataclass
 class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
-    `last`: every candidate's evidence in the last round it was tested (for those chosen, the
-    round that admitted it); `level`: the per-candidate level of that round;
-    `models`: the chosen model on each half; `first`: every candidate's evidence in the
-    first round (each against the baseline alone); `rounds`: per round, its level, every
-    candidate's evidence and the effect it added (`None` for the round that stopped)."""
+    `models`: the chosen model on each half; `rounds`: per round, its per-candidate level,
+    every candidate's evidence and the effect it added (`None` for the round that stopped).
+    Derived from them: `first`, every candidate's evidence in the first round (each against
+    the baseline alone); `last`, every candidate's evidence in the last round it was tested
+    (for those chosen, the round that admitted it); `level`, the per-candidate level of that
+    round."""
 
     chosen: list[tuple[Effect, Evidence]]
-    last: dict[str, Evidence]
-    level: dict[str, float]
     models: list[Model]
-    first: dict[str, Evidence]
-    rounds: list[tuple[float, dict[str, Evidence], str | None]] = dataclasses.field(
-        default_factory=list)
+    rounds: list[tuple[float, dict[str, Evidence], str | None]]
+
+    @functools.cached_property
+    def first(self) -> dict[str, Evidence]:
+        return dict(self.rounds[0][1]) if self.rounds else {}
+
+    @functools.cached_property
+    def last(self) -> dict[str, Evidence]:
+        return {k: ev for _, evs, _ in self.rounds for k, ev in evs.items()}
+
+    @functools.cached_property
+    def level(self) -> dict[str, float]:
+        return {k: lv for lv, evs, _ in self.rounds for k in evs}
 
 
 def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effect],
@@ -81,7 +91,7 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
                    max_effects: int = MAX_EFFECTS) -> Selection:
     models: list[Model] = [() for _ in halves]
     remaining = list(catalogue)
-    chosen, last, level, first, rounds = [], {}, {}, {}, []
+    chosen, rounds = [], []
     while remaining and len(chosen) < max_effects:
         if chosen:
             remaining = [e for e in remaining if not e.rates]
@@ -89,9 +99,6 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
                 break
         lv = alpha / len(remaining)
         ev = {e.name: evidence(engine, halves, models, e) for e in remaining}
-        last.update(ev)
-        first = first or dict(ev)
-        level.update({e.name: lv for e in remaining})
         ok = [e for e in remaining if ev[e.name].p < lv
               and ev[e.name].gain >= (max(min_gain, RATES_MIN_GAIN) if e.rates else min_gain)]
         if not ok:
@@ -102,4 +109,4 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         chosen.append((best, ev[best.name]))
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
-    return Selection(chosen, last, level, models, first, rounds)
+    return Selection(chosen, models, rounds)
