@@ -5,6 +5,14 @@ A *model* is a tuple of `(Effect, variant)` pairs added to the paper's baseline 
 the split, Eq. 12 above it). A *channel* is a `(load, band)` pair; each is fitted on its own,
 with the regressors of the effects that act in its band. A *unit* is a flight or a block of
 one: its trim load and flapping Fourier coefficients are its own (`_regression.py`).
+
+An effect acts on the loads where it predicts flights it was not fitted to: its variant is
+wrapped in `OnLoads` with those loads, chosen by leave-one-flight-out cross-validation on the
+fitting flights (`Engine.choose`). An effect that is real on one load (a moment that grows
+with the incidence squared) is then not charged, in the held-out test, for the noise its
+columns fit on the loads it does not touch. An effect that replaces the deflection
+(`Effect.replaces_input`) acts on every load: it is one change of the one deflection, with no
+column to over-fit.
 """
 
 from __future__ import annotations
@@ -20,6 +28,23 @@ from ._regression import (Projector, harmonic_series, local_design, normal_equat
 from ._signals import Signals
 
 Model = tuple  # of (Effect, variant) pairs
+
+
+@dataclasses.dataclass(frozen=True)
+class OnLoads:
+    """A variant of an effect that acts on `loads` only (`Engine.choose`)."""
+
+    variant: object
+    loads: tuple[str, ...]
+
+
+def unwrap(variant):
+    """The effect's own variant (a time constant, ...), without the loads it acts on."""
+    return variant.variant if isinstance(variant, OnLoads) else variant
+
+
+def acts_on(variant, load: str) -> bool:
+    return not isinstance(variant, OnLoads) or load in variant.loads
 
 
 @dataclasses.dataclass
@@ -47,8 +72,10 @@ def units(sigs: Sequence[Signals], parents: Sequence[tuple[int, slice]] | None =
     return out
 
 
-def in_band(model: Model, band: str) -> Model:
-    return tuple((e, v) for e, v in model if e.band == band)
+def acting(model: Model, channel) -> Model:
+    """The entries of `model` that act on `channel` (its band, its load), variants unwrapped."""
+    load, band = channel
+    return tuple((e, unwrap(v)) for e, v in model if e.band == band and acts_on(v, load))
 
 
 class Engine:
@@ -83,7 +110,7 @@ class Engine:
         deflection of an effect that `replaces_input` in place of the measured one, then the
         other effects' columns."""
         load, band = channel
-        model = in_band(model, band)
+        model = acting(model, channel)
         key = (i, channel, tuple((e.name, v) for e, v in model))
         if key not in self._design and self.units[i].parent is not None:
             u = self.units[i]
@@ -111,7 +138,7 @@ class Engine:
 
     def fit(self, idx: Sequence[int], channel, model: Model = ()):
         """Global coefficients on units `idx`: `(theta, sse)` (the training error)."""
-        model = in_band(model, channel[1])
+        model = acting(model, channel)
         key = (tuple(idx), channel, tuple((e.name, v) for e, v in model))
         if key not in self._fits:
             self._fits[key] = solve([self.normal_equations(i, channel, model) for i in idx])
@@ -120,7 +147,7 @@ class Engine:
     def normal_equations(self, i: int, channel, model: Model = ()):
         """Unit `i`'s share of the normal equations of `channel` under `model` (cached: the
         folds of the cross-fit share their units)."""
-        model = in_band(model, channel[1])
+        model = acting(model, channel)
         key = (i, channel, tuple((e.name, v) for e, v in model))
         if key not in self._normal:
             self._normal[key] = normal_equations(self.design(i, channel, model),
@@ -147,6 +174,35 @@ class Engine:
         costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
                      for ch in self.channels(effect.band)) for v in effect.variants]
         return effect.variants[int(np.argmin(costs))]
+
+    def choose(self, idx, model: Model, effect: Effect, sigma2: dict) -> OnLoads:
+        """`effect`'s variant (`best_variant`) and the loads it acts on: those of its band
+        whose leave-one-flight-out error over the units `idx` (each flight scored by the
+        model fitted on the others, its local terms its own) it lowers. No threshold: a
+        column set that only fits noise raises that error. Every load for an effect that
+        replaces the deflection, or with fewer than three units."""
+        v = self.best_variant(idx, model, effect, sigma2)
+        chans = self.channels(effect.band)
+        every = OnLoads(v, tuple(ld for ld, _ in chans))
+        if len(idx) < 3 or effect.replaces_input:
+            return every
+        loads = tuple(ch[0] for ch in chans
+                      if self.loo_error(idx, ch, model + ((effect, every),))
+                      < self.loo_error(idx, ch, model))
+        return OnLoads(v, loads)
+
+    def loo_error(self, idx, channel, model: Model) -> float:
+        """Leave-one-unit-out error of `channel` over the units `idx`: each unit's sum of
+        squares under the fit to the others, from the units' normal equations."""
+        parts = [self.normal_equations(i, channel, model) for i in idx]
+        ata = sum(p[0] for p in parts)
+        atb = sum(p[1] for p in parts)
+        btb = sum(p[2] for p in parts)
+        total = 0.0
+        for a, b, c in parts:
+            theta, _ = solve([(ata - a, atb - b, btb - c)])
+            total += c - 2.0 * float(theta @ b) + float(theta @ a @ theta)
+        return total
 
     def block_errors(self, fit_idx, score_idx, model: Model, band: str) -> np.ndarray:
         """Sum of squared residuals of `model` fitted on `fit_idx`, on each unit of `score_idx`

@@ -11,7 +11,7 @@ import numpy as np
 
 from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
-from ._attribution import Engine, units
+from ._attribution import Engine, acts_on, units, unwrap
 from ._catalogue import CATALOGUE, Effect
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
@@ -99,6 +99,7 @@ class Diagnosis:
 
 
 def _variant_text(v) -> str | None:
+    v = unwrap(v)
     if v is None:
         return None
     if isinstance(v, float):  # a time constant or lead (0: at once)
@@ -154,6 +155,8 @@ def drivers(engine: Engine, idx, probe: Effect, variant, sigma2: dict) -> list[d
     weight: dict[str, float] = {}
     model = ((probe, variant),)
     for ch in engine.channels(probe.band):
+        if not acts_on(variant, ch[0]):
+            continue
         theta, _ = engine.fit(idx, ch, model)
         cols = np.concatenate([engine.design(i, ch, model) for i in idx])
         names = probe.labels(ch[0]) if probe.labels else (probe.name,)
@@ -191,7 +194,9 @@ def diagnose(
     (equation error): fast, and exact for the linear-in-parameters augmentations of the
     catalogue.
 
-    1. **Which**: each effect of `catalogue` adds its regressors. Its out-of-sample value is
+    1. **Which**: each effect of `catalogue` adds its regressors, on the loads where they
+       lower the fitting flights' leave-one-flight-out error (`acts_on` in each row; an
+       effect that replaces the deflection acts on all). Its out-of-sample value is
        measured by a cross-fit (fitted on the training flights and scored on the test
        flights' blocks of about 1 s, and the other way round), pooled over the loads of its
        band, and judged by a one-sided t test across blocks (`_significance.py`). Effects are
@@ -301,7 +306,7 @@ def diagnose(
 
     def describe(e: Effect) -> dict:
         ev = sel.last[e.name]
-        variant = engine.best_variant(train_idx, (), e, sigma2)
+        variant = engine.choose(train_idx, (), e, sigma2)
         after_band = test_residuals(((e, variant),))
         after_res = [full(r) for r in after_band]
         augmented[e.name] = after_res
@@ -324,6 +329,7 @@ def diagnose(
             "affected": affected,
             "band": e.band,
             "variant": _variant_text(variant),
+            "acts_on": list(variant.loads),
             "p": ev.p,
             "confidence": max(0.0, 1.0 - ev.p * alpha / level),
             "detection_limit_pct": 100.0 * ev.detection_limit(level),
@@ -354,21 +360,21 @@ def diagnose(
     effects, unexplained, model, prev = [], None, (), rms_before
     in_sim = []  # (name, variant) of the verdict's effects, for the simulation
     for e, ev in sel.chosen:
-        model = model + ((e, engine.best_variant(train_idx, model, e, sigma2)),)
+        model = model + ((e, engine.choose(train_idx, model, e, sigma2)),)
         res = test_residuals(model)
         now = rms_by_load([full(r) for r in res])
         affected = affected_loads(ev)
         row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
-               "p": ev.p, "affected": affected,
+               "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
                "shrink_pct": shrink(prev, now, affected),
                "test_rms_before": prev, "test_rms_after": now}
         prev = now
         if e.rates and not effects and unexplained is None:
             row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
-            row["shortest_lag"] = model[-1][1] == min(e.variants)
+            row["shortest_lag"] = unwrap(model[-1][1]) == min(e.variants)
         if e.name in named and unexplained is None:
             effects.append(row)
-            in_sim.append((e.name, model[-1][1]))
+            in_sim.append((e.name, unwrap(model[-1][1])))
         elif e.name in named:  # after structure outside the catalogue: it may only echo it
             unexplained["then"].append(row)
         elif unexplained is None:

@@ -73,7 +73,7 @@ class Evidence:
     """Out-of-sample evidence for one candidate added to a model."""
 
     effect: str
-    variants: tuple  # chosen on each half's fit units
+    variants: tuple  # chosen on each half's fit units (`OnLoads`)
     d: np.ndarray  # per scoring block, pooled log ratio
     before: dict  # per load: held-out SSE summed over blocks, without the candidate
     after: dict  # and with it
@@ -137,7 +137,7 @@ def evidence(engine: Engine, halves: list[Half], models: list[Model], effect: Ef
     before = np.zeros(len(chans))
     after = np.zeros(len(chans))
     for half, model in zip(halves, models):
-        v = engine.best_variant(half.fit, model, effect, half.sigma2)
+        v = engine.choose(half.fit, model, effect, half.sigma2)
         eb = engine.block_errors(half.fit, half.score, model, effect.band)
         ea = engine.block_errors(half.fit, half.score, model + ((effect, v),), effect.band)
         w = np.array([1.0 / half.sigma2[ch] for ch in chans])
