@@ -36,6 +36,43 @@ def right(r: dict) -> bool | None:
     return set(r["effect"].split("+")) <= named
 
 
+def tentative_named(r: dict) -> set[str]:
+    """The effects of a result named after the first as `tentative` (`effects_detail`; for a
+    record written before the flag existed, from its recorded `rounds` by the same rule,
+    `fwid.diagnose._selection.SECONDARY_SHARE`)."""
+    detail = r.get("effects_detail") or []
+    if detail and "tentative" in detail[0]:
+        return {e["effect"] for e in detail if e.get("tentative")}
+    from fwid.diagnose._selection import SECONDARY_SHARE
+
+    rounds, named = r.get("rounds") or [], r.get("effects") or []
+    if len(named) < 2 or not rounds:
+        return set()
+    gain = {rd["added"]: rd["candidates"][rd["added"]]["gain_pct"] for rd in rounds
+            if rd["added"]}
+    return {e for e in named[1:] if gain[e] < SECONDARY_SHARE * gain[named[0]]}
+
+
+def firmly_right(r: dict) -> bool | None:
+    """`right`, counting only the effects named firmly (not `tentative`) for a pair."""
+    ok = right(r)
+    if r["kind"] != "pair" or not ok:
+        return ok
+    return not set(r["effect"].split("+")) & tentative_named(r)
+
+
+def extras(results) -> list[str]:
+    """Single effects named right with more effects after them: firm and tentative."""
+    rows = [r for r in results if r["kind"] == "single" and right(r)]
+    more = [r for r in rows if len(r.get("effects") or []) > 1]
+    firm = [r for r in more if set(r["effects"][1:]) - tentative_named(r)]
+    named = Counter(e for r in more for e in r["effects"][1:])
+    return [f"Right single verdicts: {len(rows)}; with a further (spurious) effect: "
+            f"{len(more)}, of which {len(firm)} named firmly and {len(more) - len(firm)} only "
+            f"`tentative`. Further effects named: "
+            + (", ".join(f"{e} {k}" for e, k in named.most_common()) or "none") + "."]
+
+
 def _frac(rows) -> str:
     ok = [right(r) for r in rows if right(r) is not None]
     return f"{sum(ok)}/{len(ok)}" if ok else "-"
@@ -103,6 +140,8 @@ def pairs(results) -> list[str]:
         lines.append(f"| {r['effect']} | {r['form']} | {r['axis']} | {r['verdict']} | "
                      f"{', '.join(r.get('effects') or []) or '-'} | {'yes' if right(r) else 'no'} |")
     lines.append(f"\nBoth named: {_frac(rows)}.")
+    firm = sum(bool(firmly_right(r)) for r in rows)
+    lines.append(f"Both named, neither `tentative`: {firm}/{len(rows)}.")
     # an actuator delay or lag and a late log of the same deflection are one net shift of it
     shift = {"actuator-dynamics", "time-offset"}
     rest = [r for r in rows if set(r["effect"].split("+")) != shift]
@@ -170,6 +209,7 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "## False alarms (clean and out-of-catalogue flights)", "", *false_alarms(results), "",
           "## Confusion matrix (single effects, clean, out of catalogue)", "", *confusion(results),
           "", "## Two effects at once", "", *pairs(results), "",
+          "## Spurious further effects", "", *extras(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
     stem.with_suffix(".md").write_text(text)

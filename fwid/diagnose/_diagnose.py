@@ -18,7 +18,7 @@ from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
-from ._selection import ALPHA, MIN_GAIN, forward_select
+from ._selection import ALPHA, MIN_GAIN, SECONDARY_SHARE, forward_select, tentative
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
 
@@ -201,7 +201,10 @@ def diagnose(
        flights' blocks of about 1 s, and the other way round), pooled over the loads of its
        band, and judged by a one-sided t test across blocks (`_significance.py`). Effects are
        added by forward selection while one passes at `alpha` divided by the candidates still
-       in play (`_selection.py`): `effects` lists them in the order added.
+       in play (`_selection.py`): `effects` lists them in the order added, each with its
+       held-out gain relative to the first's (`relative_gain`); one named after the first with
+       less than `SECONDARY_SHARE` of it is `tentative`: it may be the misfit that the first
+       effect's form leaves, not a second effect.
     2. **How far**: baseline and candidates are re-fitted on the training flights only and
        scored on the test flights: RMS per load before and after, and `shrink_pct`, the drop
        of the RMS of the affected loads (each relative to its baseline RMS).
@@ -373,6 +376,9 @@ def diagnose(
             row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
             row["shortest_lag"] = unwrap(model[-1][1]) == min(e.variants)
         if e.name in named and unexplained is None:
+            first = sel.chosen[0][1]
+            row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
+            row["tentative"] = bool(effects) and tentative(first, ev)
             effects.append(row)
             in_sim.append((e.name, unwrap(model[-1][1])))
         elif e.name in named:  # after structure outside the catalogue: it may only echo it
@@ -460,6 +466,7 @@ def diagnose(
                             "candidates in play",
             "alpha": alpha,
             "min_gain_pct": 100 * min_gain,
+            "secondary_share": SECONDARY_SHARE,
             "block_s": BLOCK_S,
             "blocks": len(trb_idx) + len(teb_idx),
             "loads": list(loads),

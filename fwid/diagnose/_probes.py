@@ -27,8 +27,6 @@ import numpy as np
 
 from ._catalogue import Effect, _slow, axis_of
 
-#: The probe of a load that follows the attitude.
-ATTITUDE_PROBE = "attitude"
 #: The attitude angle of each axis.
 ATTITUDE = {"lon": "theta", "lat": "phi"}
 
@@ -48,7 +46,7 @@ def _drift(s, load, variant, h, dh):
 
 
 PROBES: tuple[Effect, ...] = (
-    Effect(ATTITUDE_PROBE, "loads follow the attitude angle", "averaged", _attitude,
+    Effect("attitude", "loads follow the attitude angle", "averaged", _attitude,
            labels=lambda load: (ATTITUDE[axis_of(load)],), probe=True),
     Effect("drift", "a trend over the flight common to all flights", "averaged", _drift,
            labels=lambda load: ("time", "time"), probe=True),

@@ -94,10 +94,13 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
-        lines.append(f"  and also: {e['effect']}"
+        lines.append(f"  and also{' (tentative)' if e.get('tentative') else ''}: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")
                      + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
-                     f"{'/'.join(e['affected'])}")
+                     f"{'/'.join(e['affected'])}"
+                     + (f" (its held-out gain {100 * e['relative_gain']:.0f} % of the first's: "
+                        "possibly what the first effect's form leaves)"
+                        if e.get("tentative") else ""))
     if d.unexplained is not None and d.verdict not in ("unexplained", "random-disturbance"):
         u = d.unexplained
         lines.append(f"  and unexplained structure left: {u['description']}, p = {u['p']:.2g}, "

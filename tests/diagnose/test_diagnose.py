@@ -126,6 +126,11 @@ def test_report_follows_the_contract(effect_flights):
     rep = json.loads(json.dumps(d.to_json()))
     assert rep["verdict"] == "flap-coupling"
     assert rep["effects"][0]["effect"] == "flap-coupling"
+    for k, e in enumerate(rep["effects"]):
+        # the loads it acts on (leave-one-flight-out), and how sure a further effect is
+        assert set(e["acts_on"]) <= set(rep["method"]["loads"]) and e["acts_on"]
+        assert e["tentative"] == (k > 0 and e["relative_gain"] < rep["method"]["secondary_share"])
+    assert rep["effects"][0]["relative_gain"] == pytest.approx(1.0)
     for c in rep["candidates"]:
         assert {"effect", "significant", "shrink_pct", "test_rms_before",
                 "test_rms_after", "p", "confidence", "detection_limit_pct"} <= set(c)

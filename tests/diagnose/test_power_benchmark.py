@@ -8,7 +8,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 import diagnosis_power as dp  # noqa: E402
-from _power_summary import summarise  # noqa: E402
+from _power_summary import firmly_right, summarise, tentative_named  # noqa: E402
 
 
 def test_halves_share_no_form_and_no_seed():
@@ -41,3 +41,22 @@ def test_slice_runs_blind_and_is_summarised(tmp_path):
     assert "| none | 4+4 | 0 | 1 | 1 | none 1 |" in text
     assert (tmp_path / "slice.png").stat().st_size > 0
     json.dumps(recs)  # the records are what the .jsonl holds
+
+
+def test_tentative_further_effects_are_counted_from_the_flag_or_the_rounds():
+    def rnd(added, **gains):
+        return {"added": added, "candidates": {k.replace("_", "-"): {"gain_pct": g}
+                                               for k, g in gains.items()}}
+
+    rec = {"kind": "pair", "effect": "flap-coupling+nonlinear-aero", "verdict": "flap-coupling",
+           "effects": ["flap-coupling", "nonlinear-aero"],
+           "rounds": [rnd("flap-coupling", flap_coupling=40.0, nonlinear_aero=5.0),
+                      rnd("nonlinear-aero", nonlinear_aero=5.0), rnd(None)]}
+    assert tentative_named(rec) == {"nonlinear-aero"}  # 5 < 0.25 x 40, from the rounds
+    assert not firmly_right(rec)
+    rec["rounds"][1]["candidates"]["nonlinear-aero"]["gain_pct"] = 20.0
+    assert tentative_named(rec) == set() and firmly_right(rec)
+    # a record with the flag: the flag wins
+    rec["effects_detail"] = [{"effect": "flap-coupling", "tentative": False},
+                             {"effect": "nonlinear-aero", "tentative": True}]
+    assert tentative_named(rec) == {"nonlinear-aero"}

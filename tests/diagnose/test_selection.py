@@ -4,8 +4,8 @@ catalogue explanation, and competes with the probes on its gain otherwise."""
 import types
 
 from fwid.diagnose._catalogue import CATALOGUE, get_effect
-from fwid.diagnose._probes import ATTITUDE_PROBE, PROBES
-from fwid.diagnose._selection import RATES_MARGIN, _admissible, _after_the_first
+from fwid.diagnose._probes import PROBES
+from fwid.diagnose._selection import RATES_MARGIN, SECONDARY_SHARE, _admissible, tentative
 
 
 def _ev(**means):
@@ -27,14 +27,8 @@ def test_rates_entry_gives_way_to_a_direct_entry_with_half_its_gain():
     assert _admissible([un, att], _ev(unsteady_aero=0.1, attitude=0.3)) == [un, att]
 
 
-def test_after_the_first_effect_a_rates_entry_needs_the_attitude_probe_beside_it():
-    un, act = get_effect("unsteady-aero"), get_effect("actuator-dynamics")
-    att = next(p for p in PROBES if p.name == ATTITUDE_PROBE)
-    drift = next(p for p in PROBES if p.name != ATTITUDE_PROBE)
-    # without the attitude probe passing, it is an echo of the first effect's misfit
-    assert _after_the_first([un, act, drift]) == [act, drift]
-    # with it, the gravity part of the rates is real: it takes the probe's place
-    assert _after_the_first([un, att, act]) == [un, act]
-    # the probe alone, or neither, is left as it is
-    assert _after_the_first([att, act]) == [att, act]
-    assert _after_the_first([]) == []
+
+def test_a_further_effect_smaller_than_the_first_leaves_is_tentative():
+    first = types.SimpleNamespace(gain=0.40)
+    assert tentative(first, types.SimpleNamespace(gain=0.9 * SECONDARY_SHARE * 0.40))
+    assert not tentative(first, types.SimpleNamespace(gain=1.1 * SECONDARY_SHARE * 0.40))
