@@ -39,18 +39,18 @@ def right(r: dict) -> bool | None:
 def tentative_named(r: dict) -> set[str]:
     """The effects of a result named after the first as `tentative` (`effects_detail`; for a
     record written before the flag existed, from its recorded `rounds` by the same rule,
-    `fwid.diagnose._selection.SECONDARY_SHARE`)."""
+    `fwid.diagnose._selection.tentative`)."""
     detail = r.get("effects_detail") or []
     if detail and "tentative" in detail[0]:
         return {e["effect"] for e in detail if e.get("tentative")}
-    from fwid.diagnose._selection import SECONDARY_SHARE
+    from fwid.diagnose._selection import tentative
 
     rounds, named = r.get("rounds") or [], r.get("effects") or []
     if len(named) < 2 or not rounds:
         return set()
     gain = {rd["added"]: rd["candidates"][rd["added"]]["gain_pct"] for rd in rounds
             if rd["added"]}
-    return {e for e in named[1:] if gain[e] < SECONDARY_SHARE * gain[named[0]]}
+    return {e for e in named[1:] if tentative(gain[named[0]], gain[e])}
 
 
 def firmly_right(r: dict) -> bool | None:

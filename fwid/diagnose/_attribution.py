@@ -23,8 +23,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._catalogue import CATALOGUE, Effect, base_columns
-from ._regression import (Projector, harmonic_series, local_design, normal_equations, residual,
-                          solve)
+from ._regression import (Projector, error, harmonic_series, local_design, normal_equations,
+                          residual, solve)
 from ._signals import Signals
 
 Model = tuple  # of (Effect, variant) pairs
@@ -91,6 +91,7 @@ class Engine:
         self._series: dict = {}
         self._fits: dict = {}
         self._normal: dict = {}
+        self._loo: dict = {}
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]
@@ -193,16 +194,17 @@ class Engine:
 
     def loo_error(self, idx, channel, model: Model) -> float:
         """Leave-one-unit-out error of `channel` over the units `idx`: each unit's sum of
-        squares under the fit to the others, from the units' normal equations."""
-        parts = [self.normal_equations(i, channel, model) for i in idx]
-        ata = sum(p[0] for p in parts)
-        atb = sum(p[1] for p in parts)
-        btb = sum(p[2] for p in parts)
-        total = 0.0
-        for a, b, c in parts:
-            theta, _ = solve([(ata - a, atb - b, btb - c)])
-            total += c - 2.0 * float(theta @ b) + float(theta @ a @ theta)
-        return total
+        squares under the fit to the others, from the units' normal equations (cached: every
+        candidate of a round compares with the same model without it)."""
+        key = (tuple(idx), channel, tuple((e.name, v) for e, v in acting(model, channel)))
+        if key not in self._loo:
+            parts = [self.normal_equations(i, channel, model) for i in idx]
+            ata = sum(p[0] for p in parts)
+            atb = sum(p[1] for p in parts)
+            btb = sum(p[2] for p in parts)
+            self._loo[key] = sum(error(p, solve([(ata - p[0], atb - p[1], btb - p[2])])[0])
+                                 for p in parts)
+        return self._loo[key]
 
     def block_errors(self, fit_idx, score_idx, model: Model, band: str) -> np.ndarray:
         """Sum of squared residuals of `model` fitted on `fit_idx`, on each unit of `score_idx`

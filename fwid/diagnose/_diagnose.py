@@ -378,7 +378,7 @@ def diagnose(
         if e.name in named and unexplained is None:
             first = sel.chosen[0][1]
             row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
-            row["tentative"] = bool(effects) and tentative(first, ev)
+            row["tentative"] = bool(effects) and tentative(first.gain, ev.gain)
             effects.append(row)
             in_sim.append((e.name, unwrap(model[-1][1])))
         elif e.name in named:  # after structure outside the catalogue: it may only echo it

@@ -94,8 +94,14 @@ def solve(parts: Sequence[tuple[np.ndarray, np.ndarray, float]]) -> tuple[np.nda
             keep = w > GRAM_RCOND * max(float(w[-1]), 1e-300)
             sol = v[:, keep] @ ((v[:, keep].T @ (atb[live] / n)) / w[keep])
             theta[live] = sol / n
-    sse = btb - 2.0 * float(theta @ atb) + float(theta @ ata @ theta) if len(atb) else btb
-    return theta, max(sse, 0.0)
+    return theta, max(error((ata, atb, btb), theta), 0.0)
+
+
+def error(part: tuple[np.ndarray, np.ndarray, float], theta: np.ndarray) -> float:
+    """`|b - A theta|^2` from normal equations `(A^T A, A^T b, b^T b)` (one unit's, or a sum):
+    a fit's training error, or a unit's error under a fit to other units."""
+    ata, atb, btb = part
+    return btb - 2.0 * float(theta @ atb) + float(theta @ ata @ theta) if len(atb) else btb
 
 
 def residual(design: np.ndarray, target: np.ndarray, projector: Projector, theta) -> np.ndarray:

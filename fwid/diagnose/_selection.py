@@ -57,12 +57,6 @@ MAX_EFFECTS = 3
 #: costing more than a flag on a true one). On the held-out half: 11 of 12 spurious further
 #: effects flagged, and 7 of the 24 pairs named lose a flagged member.
 SECONDARY_SHARE = 0.25
-
-
-def tentative(first: Evidence, ev: Evidence) -> bool:
-    """Is an effect named after the first (evidence `ev` in the round that admitted it) only
-    as large as what the first effect's form may leave (`SECONDARY_SHARE`)?"""
-    return ev.gain < SECONDARY_SHARE * first.gain
 #: How many times the gain of another passing catalogue entry an entry built on states'
 #: rates must have to be preferred to it.
 RATES_MARGIN = 1.2
@@ -79,6 +73,12 @@ def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
     rival = max((ev[e.name].mean for e in ok if not e.rates and not e.probe), default=None)
     return [e for e in ok
             if not (e.rates and rival is not None and RATES_MARGIN * rival >= ev[e.name].mean)]
+
+
+def tentative(first_gain: float, gain: float) -> bool:
+    """Is an effect named after the first (held-out `gain` in the round that admitted it) only
+    as large as what the first effect's form may leave (`SECONDARY_SHARE` of `first_gain`)?"""
+    return gain < SECONDARY_SHARE * first_gain
 
 
 @dataclasses.dataclass

@@ -29,6 +29,5 @@ def test_rates_entry_gives_way_to_a_direct_entry_with_half_its_gain():
 
 
 def test_a_further_effect_smaller_than_the_first_leaves_is_tentative():
-    first = types.SimpleNamespace(gain=0.40)
-    assert tentative(first, types.SimpleNamespace(gain=0.9 * SECONDARY_SHARE * 0.40))
-    assert not tentative(first, types.SimpleNamespace(gain=1.1 * SECONDARY_SHARE * 0.40))
+    assert tentative(0.40, 0.9 * SECONDARY_SHARE * 0.40)
+    assert not tentative(0.40, 1.1 * SECONDARY_SHARE * 0.40)
