@@ -73,6 +73,44 @@ def extras(results) -> list[str]:
             + (", ".join(f"{e} {k}" for e, k in named.most_common()) or "none") + "."]
 
 
+def near_tie(r: dict) -> bool | None:
+    """Was the verdict's effect or probe a near tie (`fwid.diagnose._selection.near_tie`)?
+    From the first effect's row or the `unexplained` record; for a record written before the
+    flag existed, from its first recorded round by the same rule. `None`: nothing was
+    selected."""
+    from fwid.diagnose._selection import near_tie as rule
+
+    lead = (r.get("unexplained") if r.get("verdict") == "unexplained" else
+            (r.get("effects_detail") or [None])[0])
+    if lead is not None and "near_tie" in lead:
+        return bool(lead["near_tie"])
+    rounds = r.get("rounds") or []
+    if not rounds or not rounds[0]["added"]:
+        return None
+    rd = rounds[0]
+    gain = {k: v["gain_pct"] for k, v in rd["candidates"].items()}
+    passing = [k for k, v in rd["candidates"].items() if k != rd["added"]
+               and v["p"] < rd["level"] and v["gain_pct"] >= 2.0]
+    if not passing or gain[rd["added"]] <= 0:
+        return False
+    best = max(passing, key=gain.get)
+    return rule({"effect": best, "gain_ratio": gain[best] / gain[rd["added"]]})
+
+
+def near_ties(results) -> list[str]:
+    """Right and wrong verdicts (single effects, clean, out of catalogue) with and without a
+    near tie: whether the flag tells the verdicts to doubt."""
+    rows = [(near_tie(r), right(r)) for r in results
+            if r["kind"] != "pair" and right(r) is not None]
+    out = ["| verdict | right | wrong | wrong share |", "|---|---:|---:|---:|"]
+    for label, flag in (("near tie", True), ("no near tie", False)):
+        ok = [x for f, x in rows if f is flag]
+        bad = len(ok) - sum(ok)
+        out.append(f"| {label} | {sum(ok)} | {bad} | "
+                   + (f"{100 * bad / len(ok):.0f} % |" if ok else "- |"))
+    return out
+
+
 def _frac(rows) -> str:
     ok = [right(r) for r in rows if right(r) is not None]
     return f"{sum(ok)}/{len(ok)}" if ok else "-"
@@ -210,6 +248,8 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "## Confusion matrix (single effects, clean, out of catalogue)", "", *confusion(results),
           "", "## Two effects at once", "", *pairs(results), "",
           "## Spurious further effects", "", *extras(results), "",
+          "## Near ties (a rival passing with at least `TIE_SHARE` of the verdict's gain)", "",
+          *near_ties(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
     stem.with_suffix(".md").write_text(text)

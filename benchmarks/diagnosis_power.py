@@ -174,7 +174,7 @@ def run_case(case: dict) -> dict:
     u = getattr(diag, "unexplained", None)
     if u:
         rec["unexplained"] = {k: u.get(k) for k in ("probe", "drivers", "test_shrink_pct", "p",
-                                                    "redness_after")}
+                                                    "redness_after", "runner_up", "near_tie")}
     for k in ("disturbance", "first_round", "rounds"):
         if getattr(diag, k, None) is not None:
             rec[k] = getattr(diag, k)

@@ -11,14 +11,15 @@ import numpy as np
 
 from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
-from ._attribution import Engine, acts_on, units, unwrap
+from ._attribution import Engine, units, unwrap
 from ._catalogue import CATALOGUE, Effect
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
-from ._probes import PROBES
+from ._probes import PROBES, drivers
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
-from ._selection import ALPHA, MIN_GAIN, SECONDARY_SHARE, forward_select, tentative
+from ._selection import (ALPHA, MIN_GAIN, SECONDARY_SHARE, TIE_SHARE, forward_select,
+                         near_tie, tentative)
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
 
@@ -148,28 +149,6 @@ def _blocks(sigs, first: int) -> tuple[list, list]:
     return out, parents
 
 
-def drivers(engine: Engine, idx, probe: Effect, variant, sigma2: dict) -> list[dict]:
-    """The measured signals a probe leans on, most first: per signal, the RMS over the units
-    `idx` of its columns' contribution (coefficient x column, fitted with the baseline on
-    `idx`), relative to the baseline's RMS error, summed over the probe's loads."""
-    weight: dict[str, float] = {}
-    model = ((probe, variant),)
-    for ch in engine.channels(probe.band):
-        if not acts_on(variant, ch[0]):
-            continue
-        theta, _ = engine.fit(idx, ch, model)
-        cols = np.concatenate([engine.design(i, ch, model) for i in idx])
-        names = probe.labels(ch[0]) if probe.labels else (probe.name,)
-        k = len(names)
-        part = cols[:, -k:] * theta[-k:]
-        for j, name in enumerate(names):
-            w = float(np.std(part[:, j]) / math.sqrt(sigma2[ch]))
-            weight[name] = weight.get(name, 0.0) + w
-    total = sum(weight.values()) or 1.0
-    return [{"signal": n, "share_pct": 100.0 * w / total}
-            for n, w in sorted(weight.items(), key=lambda kv: -kv[1])]
-
-
 def diagnose(
     train: Sequence[Flight],
     test: Sequence[Flight],
@@ -204,7 +183,10 @@ def diagnose(
        in play (`_selection.py`): `effects` lists them in the order added, each with its
        held-out gain relative to the first's (`relative_gain`); one named after the first with
        less than `SECONDARY_SHARE` of it is `tentative`: it may be the misfit that the first
-       effect's form leaves, not a second effect.
+       effect's form leaves, not a second effect. Each row names its `runner_up` (the other
+       candidate that passed in its round with the largest gain, and its `gain_ratio`); a
+       rival with at least `TIE_SHARE` of its gain is a `near_tie`: the data barely tell the
+       two apart (the first effect's and the probe's rows carry it).
     2. **How far**: baseline and candidates are re-fitted on the training flights only and
        scored on the test flights: RMS per load before and after, and `shrink_pct`, the drop
        of the RMS of the affected loads (each relative to its baseline RMS).
@@ -221,7 +203,10 @@ def diagnose(
        from measurement noise (`"none"`: the model is adequate, up to the detection limit).
        A probe that leaves the residual red was a proxy of a disturbance, not structure; so
        was a catalogue entry built on states' rates (`unsteady-aero`), selected first, that
-       leaves it red (`disturbance["proxy"]` says which; `effects` is then empty).
+       leaves it red (`disturbance["proxy"]` says which): it is set aside with all that
+       entered after it, and the selection runs again without such entries, which may name
+       the catalogue effects the disturbance hid (`random-disturbance` when it names none
+       first: a probe would track the disturbance too).
 
     `verdict` is the first effect selected, `"unexplained"`, `"random-disturbance"`, or
     `"none"`. Each candidate carries its p value,
@@ -302,13 +287,78 @@ def diagnose(
     base_res = test_residuals(())
     before = [full(r) for r in base_res]
     rms_before = rms_by_load(before)
-    chosen = [e.name for e, _ in sel.chosen]
+    own = [ld for ld in loads if ld in AXIS_LOADS[axis]]
+    dts = [s.dt for s in te_sig]
+    own_scale = {ld: sigma2[(ld, "averaged")] for ld in own}
 
+    def slow_part(res):
+        return [{ld: r[(ld, "averaged")] for ld in own} for r in res]
+
+    named = {e.name for e in catalogue}
+
+    def name_effects(sel):
+        """The rows of the catalogue effects `sel` chose (`effects`), what its first probe says
+        (`unexplained`), and the `(name, variant)` of the effects for the simulation."""
+        effects, unexplained, model, prev, in_sim = [], None, (), rms_before, []
+        for (e, ev), rival in zip(sel.chosen, sel.rivals):
+            model = model + ((e, engine.choose(train_idx, model, e, sigma2)),)
+            res = test_residuals(model)
+            now = rms_by_load([full(r) for r in res])
+            affected = affected_loads(ev)
+            row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
+                   "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
+                   "shrink_pct": shrink(prev, now, affected),
+                   "test_rms_before": prev, "test_rms_after": now,
+                   "runner_up": None if rival is None else {
+                       "effect": rival[0],
+                       "gain_ratio": rival[1].gain / ev.gain if ev.gain > 0 else 1.0}}
+            row["near_tie"] = near_tie(row["runner_up"])
+            prev = now
+            if e.rates and not effects and unexplained is None:
+                row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
+                row["shortest_lag"] = unwrap(model[-1][1]) == min(e.variants)
+            if e.name in named and unexplained is None:
+                first = sel.chosen[0][1]
+                row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
+                row["tentative"] = bool(effects) and tentative(first.gain, ev.gain)
+                effects.append(row)
+                in_sim.append((e.name, unwrap(model[-1][1])))
+            elif e.name in named:  # after structure outside the catalogue: it may only echo it
+                unexplained["then"].append(row)
+            elif unexplained is None:
+                unexplained = {"probe": e.name, "description": e.description,
+                               "drivers": drivers(engine, train_idx, e, model[-1][1], sigma2),
+                               "test_shrink_pct": row["shrink_pct"], "p": ev.p,
+                               "variant": row["variant"], "affected": affected,
+                               "redness_after": colour(slow_part(res), dts, own,
+                                                       own_scale)["redness"], "then": [],
+                               "runner_up": row["runner_up"], "near_tie": row["near_tie"]}
+        return effects, unexplained, in_sim
+
+    disturbance = colour(slow_part(base_res), dts, own, own_scale)
+    disturbance.update(spectrum(slow_part(base_res), dts, own), red_min=RED_MIN)
+    effects, unexplained, in_sim = name_effects(sel)
+    set_aside = sel
+    if effects and rates_proxy(effects[0], disturbance):
+        # an entry built on states' rates that leaves the residual red, or that takes its
+        # shortest lag (a rate) on a red residual, tracked a disturbance: set aside, with all
+        # that entered after it (it may track the proxy's leftovers); the selection is run
+        # again without such entries, which may find the effects the disturbance hid
+        proxy = effects[0]
+        disturbance["proxy"] = {k: proxy[k] for k in ("effect", "variant", "p", "shrink_pct",
+                                                       "redness_after", "shortest_lag")}
+        say(f"{proxy['effect']} tracked a disturbance: selecting again without it")
+        sel = forward_select(engine, halves, [e for e in tuple(catalogue) + tuple(probes)
+                                              if not e.rates], alpha, min_gain)
+        effects, unexplained, in_sim = name_effects(sel)
+        if not effects:  # a probe first on the same residual tracks the disturbance too
+            unexplained = None
     chosen = [e.name for e, _ in sel.chosen]
+    last, levels = {**set_aside.last, **sel.last}, {**set_aside.level, **sel.level}
     augmented: dict = {}
 
     def describe(e: Effect) -> dict:
-        ev = sel.last[e.name]
+        ev = last[e.name]
         variant = engine.choose(train_idx, (), e, sigma2)
         after_band = test_residuals(((e, variant),))
         after_res = [full(r) for r in after_band]
@@ -322,7 +372,7 @@ def diagnose(
         ea = sum(band_energy(r[ld], s) for r, s in zip(after_res, te_sig) for ld in affected)
         band_drop = {b: 100.0 * (1.0 - a / x) if x > 0 else 0.0
                      for b, x, a in zip(BAND_NAMES, eb, ea)}
-        level = sel.level[e.name]
+        level = levels[e.name]
         return {
             "effect": e.name,
             "significant": e.name in chosen,
@@ -350,64 +400,13 @@ def diagnose(
         return out
 
     candidates, probe_rows = ranked(catalogue), ranked(probes)
-    named = {e.name for e in catalogue}
-    verdict = "none" if not chosen else chosen[0] if chosen[0] in named else "unexplained"
-
-    own = [ld for ld in loads if ld in AXIS_LOADS[axis]]
-    dts = [s.dt for s in te_sig]
-    own_scale = {ld: sigma2[(ld, "averaged")] for ld in own}
-
-    def slow_part(res):
-        return [{ld: r[(ld, "averaged")] for ld in own} for r in res]
-
-    effects, unexplained, model, prev = [], None, (), rms_before
-    in_sim = []  # (name, variant) of the verdict's effects, for the simulation
-    for e, ev in sel.chosen:
-        model = model + ((e, engine.choose(train_idx, model, e, sigma2)),)
-        res = test_residuals(model)
-        now = rms_by_load([full(r) for r in res])
-        affected = affected_loads(ev)
-        row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
-               "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
-               "shrink_pct": shrink(prev, now, affected),
-               "test_rms_before": prev, "test_rms_after": now}
-        prev = now
-        if e.rates and not effects and unexplained is None:
-            row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
-            row["shortest_lag"] = unwrap(model[-1][1]) == min(e.variants)
-        if e.name in named and unexplained is None:
-            first = sel.chosen[0][1]
-            row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
-            row["tentative"] = bool(effects) and tentative(first.gain, ev.gain)
-            effects.append(row)
-            in_sim.append((e.name, unwrap(model[-1][1])))
-        elif e.name in named:  # after structure outside the catalogue: it may only echo it
-            unexplained["then"].append(row)
-        elif unexplained is None:
-            unexplained = {"probe": e.name, "description": e.description,
-                           "drivers": drivers(engine, train_idx, e, model[-1][1], sigma2),
-                           "test_shrink_pct": row["shrink_pct"], "p": ev.p,
-                           "variant": row["variant"], "affected": affected,
-                           "redness_after": colour(slow_part(res), dts, own,
-                                                   own_scale)["redness"], "then": []}
-
-    disturbance = colour(slow_part(base_res), dts, own, own_scale)
-    disturbance.update(spectrum(slow_part(base_res), dts, own), red_min=RED_MIN)
+    verdict = effects[0]["effect"] if effects else "unexplained" if unexplained else "none"
     # a probe that leaves the residual as red as a disturbance found a proxy of it (a state
     # that integrates the disturbance), not structure; nothing at all found and a red
     # residual: a disturbance nothing measured predicts
-    proxy = None
     if verdict == "unexplained" and unexplained["redness_after"] >= RED_MIN:
         verdict = "random-disturbance"
-    elif effects and rates_proxy(effects[0], disturbance):
-        # an entry built on states' rates that leaves the residual red, or that takes its
-        # shortest lag (a rate) on a red residual, tracked a disturbance
-        proxy, effects, in_sim = effects[0], [], []
-        verdict = "random-disturbance"
-        unexplained = None  # what entered after a proxy of the disturbance tracks it too
-        disturbance["proxy"] = {k: proxy[k] for k in ("effect", "variant", "p", "shrink_pct",
-                                                       "redness_after", "shortest_lag")}
-    elif verdict == "none" and disturbance["redness"] >= RED_MIN:
+    elif verdict == "none" and (disturbance["redness"] >= RED_MIN or "proxy" in disturbance):
         verdict = "random-disturbance"
     if verdict == "unexplained":
         probe = next(e for e, _ in sel.chosen if e.name == unexplained["probe"])
@@ -467,6 +466,7 @@ def diagnose(
             "alpha": alpha,
             "min_gain_pct": 100 * min_gain,
             "secondary_share": SECONDARY_SHARE,
+            "tie_share": TIE_SHARE,
             "block_s": BLOCK_S,
             "blocks": len(trb_idx) + len(teb_idx),
             "loads": list(loads),

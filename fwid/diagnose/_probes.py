@@ -13,6 +13,8 @@ one.
 - `attitude`: the load follows the attitude angle (theta or phi), which Eqs. (2-6) leave out.
 - `drift`: a trend over the flight common to all flights (battery sag, temperature).
 
+`drivers` says which measured signals a selected probe leans on.
+
 (The leading deflection and the flapping frequency were probes until issue 16 made them the
 catalogue's `time-offset` and `flap-frequency`.)
 
@@ -23,8 +25,11 @@ probe would "explain" any residual, measurement noise included.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ._attribution import Engine, acts_on
 from ._catalogue import Effect, _slow, axis_of
 
 #: The attitude angle of each axis.
@@ -54,3 +59,25 @@ PROBES: tuple[Effect, ...] = (
 
 #: Names of the probes.
 PROBE_NAMES = tuple(p.name for p in PROBES)
+
+
+def drivers(engine: Engine, idx, probe: Effect, variant, sigma2: dict) -> list[dict]:
+    """The measured signals a probe leans on, most first: per signal, the RMS over the units
+    `idx` of its columns' contribution (coefficient x column, fitted with the baseline on
+    `idx`), relative to the baseline's RMS error, summed over the probe's loads."""
+    weight: dict[str, float] = {}
+    model = ((probe, variant),)
+    for ch in engine.channels(probe.band):
+        if not acts_on(variant, ch[0]):
+            continue
+        theta, _ = engine.fit(idx, ch, model)
+        cols = np.concatenate([engine.design(i, ch, model) for i in idx])
+        names = probe.labels(ch[0]) if probe.labels else (probe.name,)
+        k = len(names)
+        part = cols[:, -k:] * theta[-k:]
+        for j, name in enumerate(names):
+            w = float(np.std(part[:, j]) / math.sqrt(sigma2[ch]))
+            weight[name] = weight.get(name, 0.0) + w
+    total = sum(weight.values()) or 1.0
+    return [{"signal": n, "share_pct": 100.0 * w / total}
+            for n, w in sorted(weight.items(), key=lambda kv: -kv[1])]

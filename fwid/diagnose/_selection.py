@@ -75,23 +75,41 @@ def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
             if not (e.rates and rival is not None and RATES_MARGIN * rival >= ev[e.name].mean)]
 
 
+#: An effect's verdict is a near tie when another candidate passing in the round that admitted
+#: it has at least this share of its held-out gain: which of the two it is, the data barely
+#: say. Chosen on the development half of `benchmarks/diagnosis_power.py` (its recorded
+#: first rounds; single effects, clean and out-of-catalogue cases): verdicts with a rival at
+#: 0.95 or more of their gain were wrong 13 times in 39, the others 22 times in 313 (at 0.9:
+#: 15 in 63; at 1.0: 10 in 20). It changes no verdict: it says which to doubt.
+TIE_SHARE = 0.95
+
+
 def tentative(first_gain: float, gain: float) -> bool:
     """Is an effect named after the first (held-out `gain` in the round that admitted it) only
     as large as what the first effect's form may leave (`SECONDARY_SHARE` of `first_gain`)?"""
     return gain < SECONDARY_SHARE * first_gain
 
 
+def near_tie(runner_up: dict | None) -> bool:
+    """Is an effect's `runner_up` (`{"effect", "gain_ratio"}` or `None`) a near tie
+    (`TIE_SHARE`)?"""
+    return runner_up is not None and runner_up["gain_ratio"] >= TIE_SHARE
+
+
 @dataclasses.dataclass
 class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
-    `models`: the chosen model on each half; `rounds`: per round, its per-candidate level,
-    every candidate's evidence and the effect it added (`None` for the round that stopped).
+    `rivals`: for each, the other candidate that passed in its round with the largest gain
+    and its evidence (`None` when none did); `models`: the chosen model on each half;
+    `rounds`: per round, its per-candidate level, every candidate's evidence and the effect
+    it added (`None` for the round that stopped).
     Derived from them: `first`, every candidate's evidence in the first round (each against
     the baseline alone); `last`, every candidate's evidence in the last round it was tested
     (for those chosen, the round that admitted it); `level`, the per-candidate level of that
     round."""
 
     chosen: list[tuple[Effect, Evidence]]
+    rivals: list[tuple[str, Evidence] | None]
     models: list[Model]
     rounds: list[tuple[float, dict[str, Evidence], str | None]]
 
@@ -108,12 +126,17 @@ class Selection:
         return {k: lv for lv, evs, _ in self.rounds for k in evs}
 
 
+def passes(e: Effect, ev: Evidence, level: float, min_gain: float) -> bool:
+    """Does candidate `e` with evidence `ev` pass a round at `level`?"""
+    return ev.p < level and ev.gain >= (max(min_gain, RATES_MIN_GAIN) if e.rates else min_gain)
+
+
 def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effect],
                    alpha: float = ALPHA, min_gain: float = MIN_GAIN,
                    max_effects: int = MAX_EFFECTS) -> Selection:
     models: list[Model] = [() for _ in halves]
     remaining = list(catalogue)
-    chosen, rounds = [], []
+    chosen, rivals, rounds = [], [], []
     while remaining and len(chosen) < max_effects:
         if chosen:
             remaining = [e for e in remaining if not e.rates]
@@ -121,14 +144,16 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
                 break
         lv = alpha / len(remaining)
         ev = {e.name: evidence(engine, halves, models, e) for e in remaining}
-        ok = [e for e in remaining if ev[e.name].p < lv
-              and ev[e.name].gain >= (max(min_gain, RATES_MIN_GAIN) if e.rates else min_gain)]
+        ok = [e for e in remaining if passes(e, ev[e.name], lv, min_gain)]
         if not ok:
             rounds.append((lv, ev, None))
             break
         best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
         rounds.append((lv, ev, best.name))
         chosen.append((best, ev[best.name]))
+        others = [e for e in ok if e is not best]
+        rival = max(others, key=lambda e: ev[e.name].mean) if others else None
+        rivals.append((rival.name, ev[rival.name]) if rival else None)
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
-    return Selection(chosen, models, rounds)
+    return Selection(chosen, rivals, models, rounds)

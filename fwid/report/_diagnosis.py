@@ -66,13 +66,6 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      "held-out error, but it is red (low/high-frequency PSD ratio "
                      f"{dist['redness']:.1f} >= {dist['red_min']:g}), as gusts or process noise "
                      f"make it; cycle-averaged residual RMS {size}; a filter-error fit models it")
-        if dist.get("proxy"):
-            px = dist["proxy"]
-            why = (f"left the residual red ({px['redness_after']:.1f})"
-                   if px["redness_after"] >= dist["red_min"] else
-                   f"took its shortest lag ({px['variant']}), a state's rate, on a red residual")
-            lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
-                         "tracked the disturbance through the states' rates, so it is not named)")
         if d.process_noise is not None:
             lines.append("  " + _process_noise_line(d.process_noise))
     elif d.verdict == "unexplained":
@@ -93,6 +86,21 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
+    lead = (d.unexplained if d.verdict == "unexplained" else
+            d.effects[0] if d.effects and d.effects[0]["effect"] == d.verdict else None)
+    if lead is not None and lead.get("near_tie"):
+        ru = lead["runner_up"]
+        lines.append(f"  NEAR TIE: {ru['effect']} passed too, with "
+                     f"{100 * ru['gain_ratio']:.0f} % of the verdict's held-out gain: the data "
+                     "barely tell the two apart; read the verdict as one of the two")
+    px = (d.disturbance or {}).get("proxy")
+    if px:
+        why = (f"left the residual red ({px['redness_after']:.1f})"
+               if px["redness_after"] >= d.disturbance["red_min"] else
+               f"took its shortest lag ({px['variant']}), a state's rate, on a red residual")
+        lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
+                     "tracked the disturbance through the states' rates, so it is not named; "
+                     "the selection was run again without it)")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
         lines.append(f"  and also{' (tentative)' if e.get('tentative') else ''}: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")

@@ -131,6 +131,18 @@ def test_report_follows_the_contract(effect_flights):
         assert set(e["acts_on"]) <= set(rep["method"]["loads"]) and e["acts_on"]
         assert e["tentative"] == (k > 0 and e["relative_gain"] < rep["method"]["secondary_share"])
     assert rep["effects"][0]["relative_gain"] == pytest.approx(1.0)
+    # the rival of each effect in the round that admitted it, and whether it is a near tie
+    for e, r in zip(rep["effects"], [r for r in rep["rounds"] if r["added"] in EFFECT_NAMES]):
+        others = {k: c for k, c in r["candidates"].items() if k != e["effect"]
+                  and c["p"] < r["level"] and c["gain_pct"] >= rep["method"]["min_gain_pct"]}
+        if e["runner_up"] is None:
+            assert not others and not e["near_tie"]
+        else:
+            best = max(others, key=lambda k: others[k]["gain_pct"])
+            assert e["runner_up"]["effect"] == best
+            assert e["runner_up"]["gain_ratio"] == pytest.approx(
+                others[best]["gain_pct"] / r["candidates"][e["effect"]]["gain_pct"])
+            assert e["near_tie"] == (e["runner_up"]["gain_ratio"] >= rep["method"]["tie_share"])
     for c in rep["candidates"]:
         assert {"effect", "significant", "shrink_pct", "test_rms_before",
                 "test_rms_after", "p", "confidence", "detection_limit_pct"} <= set(c)
@@ -198,6 +210,11 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
     assert band == pytest.approx(100 * (1 - np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
     text = diagnosis_summary(d)
     assert f"{band:.1f} % in its band, {c['shrink_pct']:.1f} % overall" in text
+    # a near tie is said, with the rival and how close it came
+    assert ("NEAR TIE" in text) == d.effects[0]["near_tie"]
+    d.effects[0].update(near_tie=True, runner_up={"effect": "attitude", "gain_ratio": 0.97})
+    assert "NEAR TIE: attitude passed too, with 97 % of the verdict's held-out gain" in (
+        diagnosis_summary(d))
     fig = plot_gap_map(d)
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
     assert [lab.split()[0] for lab in labels] == ["X", "Z", "M"]
