@@ -78,8 +78,10 @@ def near_tie(r: dict) -> bool | None:
     From the first effect's row or the `unexplained` record; for a record written before the
     flag existed, from its first recorded round by the same rule. `None`: nothing was
     selected."""
+    from types import SimpleNamespace as ns
+
     from fwid.diagnose._catalogue import CATALOGUE
-    from fwid.diagnose._selection import MIN_GAIN, RATES_MIN_GAIN
+    from fwid.diagnose._selection import MIN_GAIN, passes
     from fwid.diagnose._selection import near_tie as rule
 
     lead = (r.get("unexplained") if r.get("verdict") == "unexplained" else
@@ -92,9 +94,9 @@ def near_tie(r: dict) -> bool | None:
     rd = rounds[0]
     gain = {k: v["gain_pct"] for k, v in rd["candidates"].items()}
     rates = {e.name for e in CATALOGUE if e.rates}
-    passing = [k for k, v in rd["candidates"].items() if k != rd["added"] and v["p"] < rd["level"]
-               and v["gain_pct"] >= 100 * (max(MIN_GAIN, RATES_MIN_GAIN) if k in rates
-                                          else MIN_GAIN)]
+    passing = [k for k, v in rd["candidates"].items() if k != rd["added"]
+               and passes(ns(rates=k in rates), ns(p=v["p"], gain=v["gain_pct"] / 100),
+                          rd["level"], MIN_GAIN)]
     if not passing or gain[rd["added"]] <= 0:
         return False
     best = max(passing, key=gain.get)
