@@ -33,9 +33,12 @@ class Diagnosis:
     flights: the process noise F it takes and whether its innovations are white,
     `_process_noise.py`; `None` otherwise), `candidates` (the catalogue, ranked, best first, CONTRACTS section 3), `probes`
     (the same for the structure outside the catalogue, `_probes.py`), `unexplained` (what the
-    first probe selected says: drivers and shrink; `None` when no probe is selected),
+    first probe selected says: drivers and shrink; `None` when no probe is selected, or when
+    it came first after a proxy of a disturbance was set aside),
     `localisation` (the gap map of the baseline on the test flights), `rounds` (the forward
-    selection's trace: per round its per-candidate level, every candidate's `p`, `t`,
+    selection's trace (after a proxy of a disturbance was set aside, the second selection's;
+    the proxy is in `disturbance["proxy"]`): per round its per-candidate level, every
+    candidate's `p`, `t`,
     `gain_pct` and `blocks`, and the effect it `added`, `None` in the round that stopped; why
     a candidate was or was not added), and the held-out load residuals before (`residuals`)
     and after each candidate or probe (`augmented[name]`), by test flight and load, for
@@ -186,7 +189,8 @@ def diagnose(
        effect's form leaves, not a second effect. Each row names its `runner_up` (the other
        candidate that passed in its round with the largest gain, and its `gain_ratio`); a
        rival with at least `TIE_SHARE` of its gain is a `near_tie`: the data barely tell the
-       two apart (the first effect's and the probe's rows carry it).
+       two apart (every effect row and the `unexplained` probe carry it; the ratio exceeds 1
+       when the rival is an entry built on rates that gave way, `_selection.RATES_MARGIN`).
     2. **How far**: baseline and candidates are re-fitted on the training flights only and
        scored on the test flights: RMS per load before and after, and `shrink_pct`, the drop
        of the RMS of the affected loads (each relative to its baseline RMS).

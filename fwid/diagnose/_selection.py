@@ -80,7 +80,9 @@ def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
 #: say. Chosen on the development half of `benchmarks/diagnosis_power.py` (its recorded
 #: first rounds; single effects, clean and out-of-catalogue cases): verdicts with a rival at
 #: 0.95 or more of their gain were wrong 13 times in 39, the others 22 times in 313 (at 0.9:
-#: 15 in 63; at 1.0: 10 in 20). It changes no verdict: it says which to doubt.
+#: 15 in 63; at 1.0: 10 in 20; the run recorded before the flag existed). It changes no
+#: verdict: it says which to doubt. The rival may be an entry built on rates that gave way
+#: (`RATES_MARGIN`), with a ratio above 1.
 TIE_SHARE = 0.95
 
 

@@ -91,8 +91,10 @@ def diagnosis_summary(d: Diagnosis) -> str:
     if lead is not None and lead.get("near_tie"):
         ru = lead["runner_up"]
         lines.append(f"  NEAR TIE: {ru['effect']} passed too, with "
-                     f"{100 * ru['gain_ratio']:.0f} % of the verdict's held-out gain: the data "
-                     "barely tell the two apart; read the verdict as one of the two")
+                     f"{100 * ru['gain_ratio']:.0f} % of the verdict's held-out gain"
+                     + (" (an entry built on states' rates gives way to a direct explanation "
+                        "with nearly its gain)" if ru["gain_ratio"] > 1 else "")
+                     + ": the data barely tell the two apart; read the verdict as one of the two")
     px = (d.disturbance or {}).get("proxy")
     if px:
         why = (f"left the residual red ({px['redness_after']:.1f})"

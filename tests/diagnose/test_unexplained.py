@@ -45,6 +45,7 @@ def test_gusts_are_a_random_disturbance(effect_flights, tmp_path):
                       simulation=False)
     assert d.verdict == "random-disturbance"
     assert d.effects == []  # no catalogue name
+    assert d.unexplained is None  # a probe after a proxy of the gusts tracks them too
     proxy = d.disturbance.get("proxy")
     if proxy is not None:  # the rates-built entry, set aside as a proxy of the gusts
         assert proxy["effect"] == "unsteady-aero"
