@@ -81,7 +81,7 @@ def near_tie(r: dict) -> bool | None:
     from types import SimpleNamespace as ns
 
     from fwid.diagnose._catalogue import CATALOGUE
-    from fwid.diagnose._selection import MIN_GAIN, passes
+    from fwid.diagnose._selection import MIN_GAIN, passes, runner_up
     from fwid.diagnose._selection import near_tie as rule
 
     lead = (r.get("unexplained") if r.get("verdict") == "unexplained" else
@@ -92,15 +92,11 @@ def near_tie(r: dict) -> bool | None:
     if not rounds or not rounds[0]["added"]:
         return None
     rd = rounds[0]
-    gain = {k: v["gain_pct"] for k, v in rd["candidates"].items()}
     rates = {e.name for e in CATALOGUE if e.rates}
-    passing = [k for k, v in rd["candidates"].items() if k != rd["added"]
-               and passes(ns(rates=k in rates), ns(p=v["p"], gain=v["gain_pct"] / 100),
-                          rd["level"], MIN_GAIN)]
-    if not passing or gain[rd["added"]] <= 0:
-        return False
-    best = max(passing, key=gain.get)
-    return rule({"effect": best, "gain_ratio": gain[best] / gain[rd["added"]]})
+    ev = {k: ns(p=v["p"], gain=v["gain_pct"] / 100) for k, v in rd["candidates"].items()}
+    passing = {k: e for k, e in ev.items()
+               if k == rd["added"] or passes(ns(rates=k in rates), e, rd["level"], MIN_GAIN)}
+    return rule(runner_up(rd["added"], passing))
 
 
 def near_ties(results) -> list[str]:

@@ -313,9 +313,7 @@ def diagnose(
                    "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
                    "shrink_pct": shrink(prev, now, affected),
                    "test_rms_before": prev, "test_rms_after": now,
-                   "runner_up": None if rival is None else {
-                       "effect": rival[0],
-                       "gain_ratio": rival[1].gain / ev.gain if ev.gain > 0 else 1.0}}
+                   "runner_up": rival}
             row["near_tie"] = near_tie(row["runner_up"])
             prev = now
             if e.rates and not effects and unexplained is None:

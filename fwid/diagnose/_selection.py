@@ -92,6 +92,18 @@ def tentative(first_gain: float, gain: float) -> bool:
     return gain < SECONDARY_SHARE * first_gain
 
 
+def runner_up(chosen: str, passing: dict) -> dict | None:
+    """Of the candidates that passed a round (`passing`: name -> evidence with a `gain`),
+    the one other than `chosen` with the largest gain, as `{"effect", "gain_ratio"}` (its
+    gain over the chosen one's; 1 when that is not positive); `None` when none did."""
+    others = {k: ev for k, ev in passing.items() if k != chosen}
+    if not others:
+        return None
+    best = max(others, key=lambda k: others[k].gain)
+    gain = passing[chosen].gain
+    return {"effect": best, "gain_ratio": others[best].gain / gain if gain > 0 else 1.0}
+
+
 def near_tie(runner_up: dict | None) -> bool:
     """Is an effect's `runner_up` (`{"effect", "gain_ratio"}` or `None`) a near tie
     (`TIE_SHARE`)?"""
@@ -101,8 +113,7 @@ def near_tie(runner_up: dict | None) -> bool:
 @dataclasses.dataclass
 class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
-    `rivals`: for each, the other candidate that passed in its round with the largest gain
-    and its evidence (`None` when none did); `models`: the chosen model on each half;
+    `rivals`: for each, its `runner_up` in the round that admitted it; `models`: the chosen model on each half;
     `rounds`: per round, its per-candidate level, every candidate's evidence and the effect
     it added (`None` for the round that stopped).
     Derived from them: `first`, every candidate's evidence in the first round (each against
@@ -111,7 +122,7 @@ class Selection:
     round."""
 
     chosen: list[tuple[Effect, Evidence]]
-    rivals: list[tuple[str, Evidence] | None]
+    rivals: list[dict | None]
     models: list[Model]
     rounds: list[tuple[float, dict[str, Evidence], str | None]]
 
@@ -153,9 +164,7 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
         rounds.append((lv, ev, best.name))
         chosen.append((best, ev[best.name]))
-        others = [e for e in ok if e is not best]
-        rival = max(others, key=lambda e: ev[e.name].mean) if others else None
-        rivals.append((rival.name, ev[rival.name]) if rival else None)
+        rivals.append(runner_up(best.name, {e.name: ev[e.name] for e in ok}))
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
     return Selection(chosen, rivals, models, rounds)

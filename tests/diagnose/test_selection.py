@@ -62,5 +62,5 @@ def test_each_chosen_effect_keeps_the_best_other_candidate_that_passed(monkeypat
              get_effect("lon-lat-coupling"), PROBES[0]]
     sel = _selection.forward_select(None, [None], cands)
     assert [e.name for e, _ in sel.chosen] == ["flap-coupling", "nonlinear-aero"]
-    assert sel.rivals[0][0] == "nonlinear-aero" and sel.rivals[0][1].gain == 0.29
+    assert sel.rivals[0] == {"effect": "nonlinear-aero", "gain_ratio": 0.29 / 0.30}
     assert sel.rivals[1] is None
