@@ -21,7 +21,11 @@ lag of the loads behind `u`, `w`, `v` carries the gravity term of their rates) w
 2026-11-24: on the development half both effects of 29 instead of 24 of 42 pairs, for 8
 instead of 6 spurious further effects; on the held-out half 29 instead of 23 pairs, but 16
 spurious `unsteady-aero` names (11 of them not `tentative`) after effects whose held-out forms
-leave more misfit. Not adopted.
+leave more misfit. Not adopted. Nor was letting it follow effects of the flapping band only
+(2026-11-24, fifth session: their misfit lies at the flapping harmonics, which the
+cycle-averaged rates should not carry): on the development half's 60 cases with
+`flap-coupling` it named `unsteady-aero` after 4 single `amplitude` forms at strength 2 and in
+neither of the 2 pairs it belongs to (the run was stopped after 49 cases).
 """
 
 from __future__ import annotations

@@ -34,6 +34,24 @@ def _confidence_text(c: float) -> str:
     return "> 99.9 %" if c > 0.999 else f"{100 * c:.1f} %"
 
 
+def _convergence_caution(sim: dict) -> str:
+    """The caution on the simulated shrink when an output-error fit stopped at its step limit:
+    the baseline's (which lacks the effect) makes its error, and so the shrink, too large; the
+    augmented model's makes the shrink too small."""
+    if sim.get("converged", True):
+        return ""
+    base = sim.get("converged_baseline", False)
+    aug = sim.get("converged_augmented", False)
+    if not base and aug:
+        return ("; CAUTION: the baseline's output-error fit (without the effect) did not "
+                "converge (simulation.warnings), so the shrink may be overstated")
+    if base and not aug:
+        return ("; CAUTION: the augmented model's output-error fit did not converge "
+                "(simulation.warnings), so the shrink may be understated")
+    return ("; CAUTION: the output-error fits did not converge (see simulation.warnings), "
+            "read the shrink as rough")
+
+
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
@@ -127,9 +145,7 @@ def diagnosis_summary(d: Diagnosis) -> str:
                                    if sim["effects"] else f"nothing added (state RMS {change})")
             + (f"; not in the cycle-averaged EOM: {', '.join(sim['left_out'])}"
                if sim["left_out"] else "")
-            + ("" if sim.get("converged", True) else
-               "; CAUTION: an output-error fit did not converge (see simulation.warnings), "
-               "read the shrink as rough"))
+            + _convergence_caution(sim))
     lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'in-band shrink %':>16} "
                  f"{'overall %':>9} {'detect. limit %':>15}")
     for k, c in enumerate(d.candidates + d.probes):

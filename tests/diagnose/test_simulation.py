@@ -30,6 +30,20 @@ def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights, tmp
     table = aug.fits[0].table()
     assert all(np.isfinite(table[k]["std"]) and table[k]["std"] > 0 for k in ("Mde", "Zde"))
     assert d.to_json()["simulation"]["shrink_pct"] == sim["shrink_pct"]
+    # which fit stopped at its step limit is said, and the caution points the right way
+    assert sim["converged_baseline"] == all(f.converged for f in d.models.baseline.fits)
+    assert sim["converged_augmented"] == all(f.converged for f in aug.fits)
+    assert sim["converged"] == (sim["converged_baseline"] and sim["converged_augmented"])
+    from fwid.report import diagnosis_summary
+
+    cautions = {(True, True): None, (False, True): "the shrink may be overstated",
+                (True, False): "the shrink may be understated", (False, False): "rough"}
+    for flags, words in cautions.items():
+        sim.update(converged=all(flags), converged_baseline=flags[0],
+                   converged_augmented=flags[1])
+        text = diagnosis_summary(d)
+        assert ("CAUTION" in text) == (words is not None)
+        assert words is None or words in text
     # what `fwid diagnose --out` writes: the figures and the model to carry on with
     from fwid.report import write_diagnosis
 
