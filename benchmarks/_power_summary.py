@@ -75,15 +75,18 @@ def extras(results) -> list[str]:
 
 def near_tie(r: dict) -> bool | None:
     """Was the verdict's effect or probe a near tie (`fwid.diagnose._selection.near_tie`)?
-    From the first effect's row or the `unexplained` record; for a record written before the
-    flag existed, from its first recorded round by the same rule. `None`: nothing was
-    selected."""
+    The record's own `near_tie` (`None` where no row carries the flag: `none`,
+    `random-disturbance`); for an older record, from the first effect's row or the
+    `unexplained` record, or, written before the flag existed, from its first recorded round
+    by the same rule. `None`: nothing was selected."""
     from types import SimpleNamespace as ns
 
     from fwid.diagnose._catalogue import CATALOGUE
     from fwid.diagnose._selection import MIN_GAIN, passes, runner_up
     from fwid.diagnose._selection import near_tie as rule
 
+    if "near_tie" in r:  # recorded as the user saw it
+        return r["near_tie"]
     lead = (r.get("unexplained") if r.get("verdict") == "unexplained" else
             (r.get("effects_detail") or [None])[0])
     if lead is not None and "near_tie" in lead:

@@ -43,6 +43,9 @@ def test_slice_runs_blind_and_is_summarised(tmp_path):
     assert (tmp_path / "slice.png").stat().st_size > 0
     assert "| near tie |" in text and "| no near tie |" in text
     assert recs[0]["effects_detail"][0]["near_tie"] in (True, False)
+    # the record's own flag is the first effect's; none where no row carries one
+    assert recs[0]["near_tie"] == recs[0]["effects_detail"][0]["near_tie"]
+    assert recs[1]["near_tie"] is None
     back = [json.loads(json.dumps(r)) for r in recs]  # the records are what the .jsonl holds
     assert [r["verdict"] for r in back] == ["lon-lat-coupling", "none"]
 
@@ -81,6 +84,9 @@ def test_near_ties_are_counted_from_the_flag_or_the_first_round():
     assert not near_tie(rec)
     rec["effects_detail"] = [{"effect": "unsteady-aero", "near_tie": True}]
     assert near_tie(rec)  # the flag wins
+    # the record's own flag wins over both (None: no row carries one, as the user saw it)
+    assert near_tie(dict(rec, near_tie=None)) is None
+    assert near_tie(dict(rec, near_tie=False)) is False
     wrong = dict(rec, verdict="nonlinear-aero", effects_detail=[{"near_tie": False}])
     assert near_ties([rec, wrong])[2:] == ["| near tie | 1 | 0 | 0 % |",
                                            "| no near tie | 0 | 1 | 100 % |"]
