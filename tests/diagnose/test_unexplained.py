@@ -53,6 +53,13 @@ def test_gusts_are_a_random_disturbance(effect_flights, tmp_path):
         assert "it tracked the disturbance" in diagnosis_summary(d)
         assert not d.candidate("unsteady-aero")["significant"]
         assert all("unsteady-aero" not in r["candidates"] for r in d.rounds)
+        # each candidate's evidence is the second selection's (the last round it was tested
+        # in), not the first's, which was conditioned on the proxy
+        for c in d.candidates + d.probes:
+            tested = [r["candidates"][c["effect"]] for r in d.rounds
+                      if c["effect"] in r["candidates"]]
+            if tested:
+                assert c["p"] == tested[-1]["p"], c["effect"]
     dist = d.disturbance
     assert dist["redness"] >= RED_MIN
     assert set(dist["rms"]) == {"X", "Z", "M"} and all(v > 0 for v in dist["rms"].values())
