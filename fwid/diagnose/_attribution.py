@@ -13,6 +13,14 @@ with the incidence squared) is then not charged, in the held-out test, for the n
 columns fit on the loads it does not touch. An effect that replaces the deflection
 (`Effect.replaces_input`) acts on every load: it is one change of the one deflection, with no
 column to over-fit.
+
+The loads of the axis that was not manoeuvred (the lateral ones in a longitudinal diagnosis)
+take only the effects whose columns there carry the manoeuvre or belong to neither axis
+(`Effect.crosses_axes`: the coupling, the flapping modulated by every state, the flapping
+frequency, a drift; `Engine.allowed`). That axis's own states, attitude and control barely
+move, so columns built from them fit only what their noise hides from the baseline: an
+outside simulator's clean longitudinal flights were `unexplained` (the attitude probe on L,
+through the roll angle) and its real effects lost to that probe (2026-11-24, fifth session).
 """
 
 from __future__ import annotations
@@ -83,9 +91,12 @@ class Engine:
     scores it on others. Designs, units' normal equations and fits are cached, so forward selection
     and the folds of the cross-fit reuse each other's work."""
 
-    def __init__(self, all_units: Sequence[Unit], loads: Sequence[str], catalogue=CATALOGUE):
+    def __init__(self, all_units: Sequence[Unit], loads: Sequence[str], catalogue=CATALOGUE,
+                 own: Sequence[str] | None = None):
         self.units = list(all_units)
         self.loads = tuple(loads)
+        #: The loads of the manoeuvred axis (default: all).
+        self.own = self.loads if own is None else tuple(ld for ld in self.loads if ld in own)
         self.catalogue = tuple(catalogue)
         self._design: dict = {}
         self._series: dict = {}
@@ -95,6 +106,11 @@ class Engine:
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]
+
+    def allowed(self, effect: Effect) -> tuple[str, ...]:
+        """The loads `effect` may act on: the manoeuvred axis's (`own`), and the other axis's
+        too when its columns there carry the manoeuvre (`Effect.crosses_axes`)."""
+        return self.loads if effect.crosses_axes else self.own
 
     def series(self, i: int, load: str) -> tuple[np.ndarray, np.ndarray]:
         """Unit `i`'s own flapping series of `load` (Eq. 12 fitted to it) and its phase
@@ -172,8 +188,9 @@ class Engine:
         `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's)."""
         if len(effect.variants) == 1:
             return effect.variants[0]
+        chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
-                     for ch in self.channels(effect.band)) for v in effect.variants]
+                     for ch in chans) for v in effect.variants]
         return effect.variants[int(np.argmin(costs))]
 
     def choose(self, idx, model: Model, effect: Effect, sigma2: dict) -> OnLoads:
@@ -181,9 +198,10 @@ class Engine:
         whose leave-one-flight-out error over the units `idx` (each flight scored by the
         model fitted on the others, its local terms its own) it lowers. No threshold: a
         column set that only fits noise raises that error. Every load for an effect that
-        replaces the deflection, or with fewer than three units."""
+        replaces the deflection, or with fewer than three units. Only the loads it is
+        `allowed` on."""
         v = self.best_variant(idx, model, effect, sigma2)
-        chans = self.channels(effect.band)
+        chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         every = OnLoads(v, tuple(ld for ld, _ in chans))
         if len(idx) < 3 or effect.replaces_input:
             return every

@@ -181,6 +181,12 @@ class Effect:
     #: A rival outside the catalogue (`_probes.py`): when it wins, the verdict is
     #: `unexplained`.
     probe: bool = False
+    #: May it act on the loads of the axis that was not manoeuvred? Only when its columns
+    #: there carry the manoeuvred axis's signals (the coupling, the flapping modulated by
+    #: every state) or belong to neither axis (the flapping frequency, time). Built from the
+    #: other axis's own states, attitude or control, which hardly move, its columns there
+    #: would only fit what their noise hides from the baseline (`Engine.allowed`).
+    crosses_axes: bool = False
 
 
 CATALOGUE: tuple[Effect, ...] = (
@@ -189,6 +195,7 @@ CATALOGUE: tuple[Effect, ...] = (
         "flapping loads modulated by the body motion and inputs (time scales coupled)",
         "flapping",
         _flap_coupling,
+        crosses_axes=True,
     ),
     Effect(
         "nonlinear-aero",
@@ -201,6 +208,7 @@ CATALOGUE: tuple[Effect, ...] = (
         "the other axis's states and control drive the loads",
         "averaged",
         _coupling,
+        crosses_axes=True,
     ),
     Effect(
         "actuator-dynamics",
@@ -235,6 +243,7 @@ CATALOGUE: tuple[Effect, ...] = (
         _flap_frequency,
         FREQUENCY_LAGS,
         labels=lambda load: ("f", "f"),
+        crosses_axes=True,
     ),
 )
 

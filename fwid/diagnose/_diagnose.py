@@ -245,7 +245,7 @@ def diagnose(
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
-                    loads, tuple(catalogue) + tuple(probes))
+                    loads, tuple(catalogue) + tuple(probes), own=AXIS_LOADS[axis])
     n_tr, n_te, n_trb = len(tr_sig), len(te_sig), len(tr_blocks)
     train_idx = tuple(range(n_tr))
     test_idx = tuple(range(n_tr, n_tr + n_te))

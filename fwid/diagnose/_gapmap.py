@@ -84,8 +84,8 @@ def gap_map(
       window after input events and elsewhere, and per flap cycle (median, 90th percentile,
       largest and where).
     - `by_state[load]`: mean-square residual in `STATE_BINS` quantile bins of each
-      cycle-averaged state and control, relative to its mean; `top` names the state whose bins
-      differ most.
+      cycle-averaged state and control, relative to its mean; `top` names the state of the
+      manoeuvred axis (or its control) whose bins differ most.
     """
     loads = list(residuals[0])
     states = AXIS_STATES["lon"] + AXIS_STATES["lat"] + ("de", "dr")
@@ -102,7 +102,7 @@ def gap_map(
         energy = sum(band_energy(x, s) * len(x) for x, s in zip(r, sigs))
         out["by_band"][ld] = {b: _pct(e, energy.sum()) for b, e in zip(BAND_NAMES, energy)}
         out["by_time"][ld] = _by_time(sigs, r, axis)
-        out["by_state"][ld] = _by_state(sigs, r, states)
+        out["by_state"][ld] = _by_state(sigs, r, states, AXIS_STATES[axis] + (AXIS_INPUT[axis],))
     own = [ld for ld in loads if ld in AXIS_LOADS[axis]] or loads
     total = sum(unexplained[ld] for ld in own)
     for ld in loads:
@@ -138,7 +138,9 @@ def _by_time(sigs, r, axis) -> dict:
     }
 
 
-def _by_state(sigs, r, states) -> dict:
+def _by_state(sigs, r, states, manoeuvred) -> dict:
+    """Bins of every state in `states`; `top` among the `manoeuvred` axis's states and control
+    (the quiet axis's barely move: their bins split noise)."""
     r2 = np.concatenate(r) ** 2
     mean = float(np.mean(r2))
     bins, spread = {}, {}
@@ -154,5 +156,6 @@ def _by_state(sigs, r, states) -> dict:
                for b in range(STATE_BINS)]
         bins[st] = {"edges": [float(e) for e in edges], "relative_ms": rel}
         spread[st] = np.nanmax(rel) / max(np.nanmin(rel), 1e-12)
-    top = max(spread, key=spread.get) if spread else None
+    ranked = {st: v for st, v in spread.items() if st in manoeuvred}
+    top = max(ranked, key=ranked.get) if ranked else None
     return {"top": top, "top_spread": float(spread[top]) if top else None, "bins": bins}

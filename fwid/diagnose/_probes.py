@@ -54,7 +54,7 @@ PROBES: tuple[Effect, ...] = (
     Effect("attitude", "loads follow the attitude angle", "averaged", _attitude,
            labels=lambda load: (ATTITUDE[axis_of(load)],), probe=True),
     Effect("drift", "a trend over the flight common to all flights", "averaged", _drift,
-           labels=lambda load: ("time", "time"), probe=True),
+           labels=lambda load: ("time", "time"), probe=True, crosses_axes=True),
 )
 
 #: Names of the probes.

@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from .._errors import FitDivergedError
 from ..data import Flight
 from ..identify import Identification, get_model, identify
 from ._augment import augment, prepared_inputs
@@ -54,18 +55,23 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         before_id = identify(list(train), base, validate=list(test), joint=True, cutoff=cutoff)
-        after_id = None
+        after_id, failed = None, None
         if in_eom:  # from the baseline's estimates, the new terms at zero: the quadratic
             # terms' equation-error start can make the simulation blow up
             fitted = {k: float(v) for k, v in before_id.model.params.items()
                       if k not in base.local}
-            after_id = identify([prepare(f) for f in train], model.with_params(fitted),
-                                validate=[prepare(f) for f in test], joint=True,
-                                cutoff=cutoff, start="model")
+            try:
+                after_id = identify([prepare(f) for f in train], model.with_params(fitted),
+                                    validate=[prepare(f) for f in test], joint=True,
+                                    cutoff=cutoff, start="model")
+            except (FitDivergedError, np.linalg.LinAlgError) as exc:  # recorded, not raised
+                failed = (f"the model with {' + '.join(in_eom)} in the EOM could not be "
+                          f"fitted and simulated ({exc}): the simulated gap is not measured")
     before = _rms_by_state(before_id, states)
     after = _rms_by_state(after_id, states) if after_id is not None else dict(before)
     base_ok = bool(all(f.converged for f in before_id.fits))
-    augmented_ok = bool(after_id is None or all(f.converged for f in after_id.fits))
+    augmented_ok = bool(failed is None and (after_id is None
+                                            or all(f.converged for f in after_id.fits)))
     ratio = np.mean([(after[s] / before[s]) ** 2 for s in states if before[s] > 0])
     summary = {
         "states": states,
@@ -74,14 +80,15 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
         "prepared_inputs": prepared_inputs(axis, [(n, v) for n, v in effects
                                                   if n not in left_out]),
         "test_rms_before": before,
-        "test_rms_after": after,
-        "shrink_pct": 100.0 * (1.0 - math.sqrt(float(ratio))),
+        "test_rms_after": None if failed else after,
+        "shrink_pct": None if failed else 100.0 * (1.0 - math.sqrt(float(ratio))),
         "converged": bool(base_ok and augmented_ok),
         # which fit did not: the baseline's (its error, and so the shrink, may be overstated)
         # or the augmented model's (the shrink may be understated)
         "converged_baseline": base_ok,
         "converged_augmented": augmented_ok,
         "warnings": sorted({str(w.message).split(": ", 1)[-1] for w in caught}),
+        **({"message": failed} if failed else {}),
         "method": "baseline and augmented model fitted jointly on the training flights "
                   "(output-error ML, Eqs. 10-11), simulated on the test flights with their "
                   "bias terms re-estimated",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulate._experiment import Experiment
 from ..simulate._simulate import simulate
@@ -27,7 +28,11 @@ def refit_local_affine(model: GreyBoxModel, exp: Experiment, *, passes: int = 20
         return np.asarray(simulate(model.with_params(values), exp)[1])
 
     y0 = sim(b0)
-    S = np.stack([(sim({**b0, k: step}) - y0) / step for k in local], axis=-1)  # (n, ny, p)
+    with np.errstate(invalid="ignore", over="ignore"):  # a diverging model: raised below
+        S = np.stack([(sim({**b0, k: step}) - y0) / step for k in local], axis=-1)  # (n, ny, p)
+    if not (np.all(np.isfinite(y0)) and np.all(np.isfinite(S))):
+        raise FitDivergedError("the model's simulation of the flight is not finite: it "
+                               "diverges on this flight's inputs")
     z = np.asarray(exp.z)
     keep = np.asarray(exp.mask) > 0
     z, y0, S = z[keep], y0[keep], S[keep]

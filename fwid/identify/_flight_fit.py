@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import FitDivergedError
 from ..estimate._local import refit_local_affine
 from ..estimate._output_error import fit
 from ..models._greybox import GreyBoxModel
@@ -84,7 +85,11 @@ def evaluate(
     if refit_local and model.local:
         # bias terms enter affinely: a weighted linear solve (no second estimator to compile);
         # the full ML fit of the biases otherwise
-        local = refit_local_affine(model, padded)
+        try:
+            local = refit_local_affine(model, padded)
+        except FitDivergedError as exc:
+            raise FitDivergedError(f"{name}: {exc} (an unstable model, or a term that grows "
+                                   "without bound)") from exc
         if local is None:
             r = fit(model.with_free(model.local), exp, names=[name], start="model")
             local = {k: float(r.model.params[k]) for k in model.local}

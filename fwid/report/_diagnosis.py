@@ -80,10 +80,15 @@ def diagnosis_summary(d: Diagnosis) -> str:
     elif d.verdict == "random-disturbance":
         dist = d.disturbance
         size = ", ".join(f"{ld} {v:.3g}" for ld, v in dist["rms"].items())
-        lines.append("  VERDICT: random-disturbance: no catalogue effect or probe explains the "
-                     "held-out error, but it is red (low/high-frequency PSD ratio "
-                     f"{dist['redness']:.1f} >= {dist['red_min']:g}), as gusts or process noise "
-                     f"make it; cycle-averaged residual RMS {size}; a filter-error fit models it")
+        u = d.unexplained
+        why = (f"the {u['probe']} probe was selected (p = {u['p']:.2g}) but leaves it red "
+               f"({u['redness_after']:.1f}): it tracks what the disturbance did; no catalogue "
+               "effect explains it" if u else
+               "no catalogue effect or probe explains the held-out error")
+        lines.append(f"  VERDICT: random-disturbance: {why}; the error is red (low/high-"
+                     f"frequency PSD ratio {dist['redness']:.1f} >= {dist['red_min']:g}), as "
+                     f"gusts or process noise make it; cycle-averaged residual RMS {size}; a "
+                     "filter-error fit models it")
         if d.process_noise is not None:
             lines.append("  " + _process_noise_line(d.process_noise))
     elif d.verdict == "unexplained":
@@ -129,13 +134,22 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" (its held-out gain {100 * e['relative_gain']:.0f} % of the first's: "
                         "possibly what the first effect's form leaves)"
                         if e.get("tentative") else ""))
+    for e in (d.unexplained or {}).get("then", []) if not d.effects else []:
+        # chosen (the table says so) but after the probe: not named, and why
+        lines.append(f"  then, after the {d.unexplained['probe']} probe: {e['effect']}"
+                     + (f" ({e['variant']})" if e["variant"] else "")
+                     + f", p = {e['p']:.2g}, a further {e['shrink_pct']:.1f} % on "
+                     f"{'/'.join(e['affected'])}; not named: selected after structure outside "
+                     "the catalogue, it may only echo it")
     if d.unexplained is not None and d.verdict not in ("unexplained", "random-disturbance"):
         u = d.unexplained
         lines.append(f"  and unexplained structure left: {u['description']}, p = {u['p']:.2g}, "
                      f"driven by {u['drivers'][0]['signal']}: a further "
                      f"{u['test_shrink_pct']:.1f} % on {'/'.join(u['affected'])}")
     sim = d.simulation
-    if sim is not None:
+    if sim is not None and sim.get("message"):
+        lines.append(f"  in simulation: {sim['message']}")
+    elif sim is not None:
         change = ", ".join(f"{k} {sim['test_rms_before'][k]:.3g} -> {sim['test_rms_after'][k]:.3g}"
                            for k in sim["states"])
         lines.append(
@@ -157,6 +171,11 @@ def diagnosis_summary(d: Diagnosis) -> str:
             f"{(f'{band:.1f}' if band is not None else '-'):>16} {c['shrink_pct']:9.1f} "
             f"{c['detection_limit_pct']:15.1f}"
         )
+    if d.rounds:
+        lines.append(f"  ('chosen': passed its round's level, alpha over the candidates in "
+                     f"play, {d.rounds[0]['level']:.2g} in the first round, with a held-out "
+                     f"gain of at least {d.settings.get('min_gain_pct', 2):g} %, and was the "
+                     "best of those that passed)")
     return "\n".join(lines)
 
 
@@ -261,10 +280,16 @@ def _process_noise_line(pn: dict) -> str:
         return f"process noise: the filter-error fit failed ({pn['message']})"
     F = ", ".join(f"{s} {v:.3g}" for s, v in pn["F"].items())
     white = [k for k, w in pn["innovations_white"].items() if w]
+    caution = ("" if pn["converged"] and 2 * len(white) >= len(pn["innovations_white"]) else
+               "; CAUTION: the process noise does not account for the residual (the fit "
+               f"{'did not converge' if not pn['converged'] else 'leaves its innovations coloured'}"
+               "): the redness may come from the measurements (a filtered attitude, a "
+               "drifting sensor) or from an effect outside the model, not from a disturbance "
+               "of the flight; read the verdict as uncertain")
     return (f"process noise (baseline by filter error on the training flights, "
             f"{'converged' if pn['converged'] else 'NOT converged'}): F {F}; innovations white "
             f"on {len(white)}/{len(pn['innovations_white'])} outputs"
-            + (f" ({', '.join(white)})" if white else ""))
+            + (f" ({', '.join(white)})" if white else "") + caution)
 
 
 def write_diagnosis(d: Diagnosis, out: str | Path) -> list[str]:

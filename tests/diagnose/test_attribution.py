@@ -74,3 +74,24 @@ def test_an_effect_on_one_load_acts_on_that_load_only():
         e0 = _engine(np.random.default_rng(100 + seed), quadratic_on_m=0.0)
         chosen += len(e0.choose(idx, (), nl, e0.mean_square(idx)).loads)
     assert chosen <= 4
+
+
+def test_an_effect_of_the_quiet_axis_is_kept_off_its_loads():
+    """Loads of the axis that was not manoeuvred (here M, by `own`) take only the effects whose
+    columns there carry the manoeuvre (`Effect.crosses_axes`): the quadratic term on M is not
+    taken up although it is there, the deflection's lag replaces it on the own loads only,
+    and the coupling and the flapping frequency may act anywhere."""
+    rng = np.random.default_rng(4)
+    flights = [_flight(rng, k) for k in range(6)]
+    eng = Engine(units(flights), ("X", "Z", "M"), own=("X", "Z"))
+    idx = tuple(range(6))
+    sigma2 = eng.mean_square(idx)
+    nl = get_effect("nonlinear-aero")
+    assert eng.allowed(nl) == ("X", "Z")
+    assert "M" not in eng.choose(idx, (), nl, sigma2).loads
+    assert eng.choose(idx, (), get_effect("actuator-dynamics"), sigma2).loads == ("X", "Z")
+    for name in ("lon-lat-coupling", "flap-frequency", "flap-coupling"):
+        assert eng.allowed(get_effect(name)) == ("X", "Z", "M")
+    # by default every load is the engine's own, and the quadratic term on M is found
+    full = Engine(units(flights), ("X", "Z", "M"))
+    assert full.choose(idx, (), nl, full.mean_square(idx)).loads == ("M",)

@@ -222,6 +222,20 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
     fig = plot_gap_map(d)
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
     assert [lab.split()[0] for lab in labels] == ["X", "Z", "M"]
+    # the gap grows with a state of the manoeuvred axis, never one of the quiet axis
+    tops = {st["top"] for st in d.localisation["by_state"].values()}
+    assert tops <= {"u", "w", "q", "de"}, tops
+    # a catalogue effect chosen after a probe is in the table as chosen: the summary says
+    # why it is not the verdict
+    then = dict(d.effects[0])
+    d.effects, d.verdict = [], "unexplained"
+    d.unexplained = {"probe": "attitude", "description": "loads follow the attitude angle",
+                     "drivers": [{"signal": "theta", "share_pct": 100.0}], "p": 1e-6,
+                     "variant": None, "affected": ["M"], "test_shrink_pct": 3.0,
+                     "redness_after": 0.5, "then": [then], "near_tie": False}
+    assert (f"then, after the attitude probe: {then['effect']}" in diagnosis_summary(d)
+            and "not named: selected after structure outside the catalogue" in
+            diagnosis_summary(d))
 
 
 def test_warns_when_the_flights_manoeuvre_in_the_other_axis(effect_flights):

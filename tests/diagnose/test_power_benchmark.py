@@ -93,13 +93,13 @@ def test_near_ties_are_counted_from_the_flag_or_the_first_round():
 
 
 def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named():
-    """A strong servo lag on a lateral manoeuvre (development case): `unsteady-aero` enters
-    first and leaves the residual red, a proxy of a disturbance; set aside, the selection run
-    again names the servo."""
+    """A strong thrust change with the flapping frequency (development case): `unsteady-aero`
+    enters first as a proxy of a disturbance (it leaves the residual red, or takes its
+    shortest lag on a red one); set aside, the selection run again names the effect."""
     case = next(c for c in dp.cases("dev") if c["kind"] == "single"
-                and c["effect"] == "actuator-dynamics" and c["form"] == "servo"
-                and c["strength"] == 2.0 and c["n"] == 8 and c["seed"] == 0)
+                and c["effect"] == "flap-frequency" and c["form"] == "thrust"
+                and c["strength"] == 2.0 and c["n"] == 6 and c["seed"] == 2)
     rec = dp.run_case(dict(case))
     assert rec["disturbance"]["proxy"]["effect"] == "unsteady-aero", rec.get("disturbance")
-    assert rec["verdict"] == "actuator-dynamics" and rec["effects"] == ["actuator-dynamics"]
+    assert rec["verdict"] == "flap-frequency" and rec["effects"] == ["flap-frequency"]
     assert all("unsteady-aero" not in r["candidates"] for r in rec["rounds"])

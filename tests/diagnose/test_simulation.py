@@ -130,3 +130,33 @@ def test_the_drift_probe_in_the_eom_reads_the_elapsed_time(effect_flights):
     fl = prepare(fwid.load_flights(effect_flights("none", seed=0)[0])[0])
     t = np.asarray(fl.t)
     np.testing.assert_allclose(np.asarray(fl["time2"]), ((t - t[0]) / 10) ** 2, atol=1e-15)
+
+
+def test_an_augmented_model_that_diverges_is_recorded_not_raised(effect_flights, monkeypatch):
+    """A model with the effect in the EOM that blows up on a test flight (an outside user's
+    yaw damping r|r| did): the diagnosis still comes back, the simulation block says why the
+    simulated gap is not measured, and the summary says it."""
+    from fwid import FitDivergedError
+    from fwid.diagnose import _simulation
+    from fwid.report import diagnosis_summary
+
+    train, test = (fwid.load_flights(p) for p in effect_flights(
+        "actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4))
+    real = _simulation.identify
+
+    def identify(flights, model, **kw):
+        if model.name != "lon":  # the augmented model
+            raise FitDivergedError("lon_0.csv: the model's simulation of the flight is not "
+                                   "finite")
+        return real(flights, model, **kw)
+
+    monkeypatch.setattr(_simulation, "identify", identify)
+    d = fwid.diagnose(train, test, process_noise=False)
+    sim = d.simulation
+    assert d.verdict == "actuator-dynamics"
+    assert sim["shrink_pct"] is None and sim["test_rms_after"] is None
+    assert "not finite" in sim["message"] and not sim["converged_augmented"]
+    assert sim["converged_baseline"] in (True, False) and d.models.augmented is None
+    assert "in simulation: the model with actuator-dynamics in the EOM could not be" in (
+        diagnosis_summary(d))
+
