@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..diagnose import BAND_NAMES, Diagnosis
+from ..diagnose._selection import RATES_MARGIN
 from ..diagnose._signals import AXIS_LOADS
 
 _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
@@ -174,8 +175,10 @@ def diagnosis_summary(d: Diagnosis) -> str:
     if d.rounds:
         lines.append(f"  ('chosen': passed its round's level, alpha over the candidates in "
                      f"play, {d.rounds[0]['level']:.2g} in the first round, with a held-out "
-                     f"gain of at least {d.settings.get('min_gain_pct', 2):g} %, and was the "
-                     "best of those that passed)")
+                     f"gain of at least {d.settings.get('min_gain_pct', 2):g} %, and had the "
+                     "largest held-out gain of those that passed; an entry built on states' "
+                     "rates gives way to one with at least "
+                     f"1/{RATES_MARGIN:g} of its gain)")
     return "\n".join(lines)
 
 

@@ -214,6 +214,9 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
     assert band == pytest.approx(100 * (1 - np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
     text = diagnosis_summary(d)
     assert f"{band:.1f} % in its band, {c['shrink_pct']:.1f} % overall" in text
+    # the rule behind 'chosen', with the first round's level
+    assert (f"('chosen': passed its round's level, alpha over the candidates in play, "
+            f"{d.rounds[0]['level']:.2g} in the first round") in text
     # a near tie is said, with the rival and how close it came
     assert ("NEAR TIE" in text) == d.effects[0]["near_tie"]
     d.effects[0].update(near_tie=True, runner_up={"effect": "attitude", "gain_ratio": 0.97})
