@@ -263,15 +263,17 @@ def plot_gap_sim(d: Diagnosis, path: str | Path | None = None, flight: int = 0) 
         ax.plot(base.t, scale * base.measured[s], "k", lw=1.0, label="measured")
         ax.plot(base.t, scale * base.simulated[s], "C3", lw=1.0,
                 label=f"baseline (RMS {d.simulation['test_rms_before'][s] * scale:.3g})")
-        if aug is not None:
+        if aug is not None and d.simulation["test_rms_after"] is not None:
             ax.plot(aug.t, scale * aug.simulated[s], "C2", lw=1.0,
                     label=f"+ {' + '.join(d.simulation['effects'])} "
                           f"(RMS {d.simulation['test_rms_after'][s] * scale:.3g})")
         ax.set_ylabel(f"d{s} [{unit}]")
         ax.legend(fontsize=7, loc="upper right")
     axs[-1].set_xlabel("time [s]")
+    shrink = d.simulation["shrink_pct"]
     fig.suptitle(f"fwid diagnose ({d.axis}): test flight {base.name}, simulated states; "
-                 f"shrink {d.simulation['shrink_pct']:.1f} %")
+                 + (f"shrink {shrink:.1f} %" if shrink is not None else
+                    "the augmented model diverged (see simulation.message)"))
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig

@@ -138,7 +138,7 @@ def test_an_augmented_model_that_diverges_is_recorded_not_raised(effect_flights,
     simulated gap is not measured, and the summary says it."""
     from fwid import FitDivergedError
     from fwid.diagnose import _simulation
-    from fwid.report import diagnosis_summary
+    from fwid.report import diagnosis_summary, plot_gap_sim
 
     train, test = (fwid.load_flights(p) for p in effect_flights(
         "actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4))
@@ -159,4 +159,7 @@ def test_an_augmented_model_that_diverges_is_recorded_not_raised(effect_flights,
     assert sim["converged_baseline"] in (True, False) and d.models.augmented is None
     assert "in simulation: the model with actuator-dynamics in the EOM could not be" in (
         diagnosis_summary(d))
+    # the written report (the CLI's path) survives it too: an outside stall case crashed here
+    title = plot_gap_sim(d)._suptitle.get_text()
+    assert "augmented model diverged" in title and "shrink" not in title
 
