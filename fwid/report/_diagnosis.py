@@ -124,9 +124,11 @@ def diagnosis_summary(d: Diagnosis) -> str:
         why = (f"left the residual red ({px['redness_after']:.1f})"
                if px["redness_after"] >= d.disturbance["red_min"] else
                f"took its shortest lag ({px['variant']}), a state's rate, on a red residual")
+        what = ("tracked the disturbance through the states' rates" if not d.effects else
+                "may only stand in, through the states' rates, for a disturbance or for what "
+                f"{d.effects[0]['effect']} explains directly")
         lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
-                     "tracked the disturbance through the states' rates, so it is not named; "
-                     "the selection was run again without it)")
+                     f"{what}, so it is not named; the selection was run again without it)")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
         lines.append(f"  and also{' (tentative)' if e.get('tentative') else ''}: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")
