@@ -92,14 +92,23 @@ def test_near_ties_are_counted_from_the_flag_or_the_first_round():
                                            "| no near tie | 0 | 1 | 100 % |"]
 
 
-def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named():
+def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named(monkeypatch):
     """A strong thrust change with the flapping frequency (development case): `unsteady-aero`
     enters first as a proxy of a disturbance (it leaves the residual red, or takes its
-    shortest lag on a red one); set aside, the selection run again names the effect."""
+    shortest lag on a red one); set aside, the selection run again names the effect, and the
+    summary does not say the entry tracked a disturbance."""
+    import fwid
+    from fwid.report import diagnosis_summary
+
     case = next(c for c in dp.cases("dev") if c["kind"] == "single"
                 and c["effect"] == "flap-frequency" and c["form"] == "thrust"
                 and c["strength"] == 2.0 and c["n"] == 6 and c["seed"] == 2)
+    seen, real = [], fwid.diagnose
+    monkeypatch.setattr(fwid, "diagnose", lambda *a, **kw: seen.append(real(*a, **kw)) or seen[-1])
     rec = dp.run_case(dict(case))
+    text = diagnosis_summary(seen[0])
+    assert "may only stand in, through the states' rates, for a disturbance or for what " \
+        "flap-frequency explains directly" in text and "tracked the disturbance" not in text
     assert rec["disturbance"]["proxy"]["effect"] == "unsteady-aero", rec.get("disturbance")
     assert rec["verdict"] == "flap-frequency" and rec["effects"] == ["flap-frequency"]
     assert all("unsteady-aero" not in r["candidates"] for r in rec["rounds"])
