@@ -8,7 +8,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 import diagnosis_power as dp  # noqa: E402
-from _power_summary import (firmly_right, near_tie, near_ties, summarise,  # noqa: E402
+from _power_summary import (catalogue_pairs, firmly_right, near_tie, near_ties, summarise,  # noqa: E402
                             tentative_named)
 
 
@@ -67,6 +67,25 @@ def test_tentative_further_effects_are_counted_from_the_flag_or_the_rounds():
     rec["effects_detail"] = [{"effect": "flap-coupling", "tentative": False},
                              {"effect": "nonlinear-aero", "tentative": True}]
     assert tentative_named(rec) == {"nonlinear-aero"}
+
+
+def test_pairs_are_also_scored_against_issue_12s_catalogue():
+    """Pairs of CONTRACTS' four need both named; with `unsteady-aero` (outside issue 12's
+    catalogue) the other effect must be named; the extended pairs count both."""
+    def rec(effect, effects):
+        return {"kind": "pair", "effect": effect, "effects": effects, "verdict": effects[0]}
+
+    rows = [rec("flap-coupling+nonlinear-aero", ["flap-coupling", "nonlinear-aero"]),
+            rec("flap-coupling+actuator-dynamics", ["flap-coupling"]),
+            rec("time-offset+flap-frequency", ["time-offset", "flap-frequency"]),
+            rec("unsteady-aero+time-offset", ["time-offset"]),
+            rec("actuator-dynamics+unsteady-aero", ["unsteady-aero"]),
+            rec("unsteady-aero+lon-lat-coupling", ["lon-lat-coupling", "unsteady-aero"])]
+    text = "\n".join(catalogue_pairs(rows))
+    assert "CONTRACTS' four effects, both named: 1/2;" in text
+    assert "without `unsteady-aero`, both named: 2/3;" in text
+    assert "the other effect named: 2/3 (both: 1);" in text
+    assert "all pairs so scored: 4/6." in text
 
 
 def test_near_ties_are_counted_from_the_flag_or_the_first_round():
