@@ -62,7 +62,12 @@ MAX_EFFECTS = 3
 #: effects flagged, and 7 of the 24 pairs named lose a flagged member.
 SECONDARY_SHARE = 0.25
 #: How many times the gain of another passing catalogue entry an entry built on states'
-#: rates must have to be preferred to it.
+#: rates must have to be preferred to it. Giving way to any passing entry when it takes its
+#: shortest lag (an outside lag + `u^2` pair was named `unsteady-aero` alone that way) was
+#: replayed on the recorded first rounds on 2026-11-24 (sixth session): on the development
+#: half 3 of 9 wrong verdicts at 0.01 s would turn right, none of the 2 right ones wrong; on the
+#: held-out records 4 right `incidence-lag` verdicts at strength 2 would turn wrong (gain ratios
+#: 1.3-4 on both sides). Not adopted.
 RATES_MARGIN = 1.2
 #: Smallest typical held-out gain of an entry built on states' rates (3 %): the rates of the
 #: other states carry a little of the load's own noise through the kinematic terms
