@@ -183,23 +183,22 @@ UNSTEADY = "unsteady-aero"
 
 
 def catalogue_pairs(rows) -> list[str]:
-    """The pairs scored against the catalogue as issue 12 wrote it: both named for pairs of
-    CONTRACTS' four effects; for pairs with `unsteady-aero` (outside that catalogue), whether
-    the other effect is named (as for a single effect beside a disturbance)."""
-    def both(r):
-        return all(e in r["effects"] for e in r["effect"].split("+"))
+    """The pairs scored against the catalogue as issue 12 wrote it: both named (`right`) for
+    pairs of CONTRACTS' four effects; for pairs with `unsteady-aero` (outside that catalogue),
+    whether the other effect is named (as for a single effect beside a disturbance)."""
+    def parts(r):
+        return set(r["effect"].split("+"))
 
-    four = [r for r in rows if set(r["effect"].split("+")) <= CONTRACTS_FOUR]
-    rest = [r for r in rows if UNSTEADY not in r["effect"].split("+")]
-    lag = [r for r in rows if UNSTEADY in r["effect"].split("+")]
-    other = [r for r in lag if all(e in r["effects"] for e in r["effect"].split("+")
-                                   if e != UNSTEADY)]
-    n_ok = sum(map(both, rest)) + len(other)
+    four = [r for r in rows if parts(r) <= CONTRACTS_FOUR]
+    rest = [r for r in rows if UNSTEADY not in parts(r)]
+    lag = [r for r in rows if UNSTEADY in parts(r)]
+    other = [r for r in lag if parts(r) - {UNSTEADY} <= set(r["effects"])]
+    n_ok = sum(map(right, rest)) + len(other)
     return ["Scored against issue 12's catalogue (an unsteady lag outside it):",
-            f"- pairs of CONTRACTS' four effects, both named: {sum(map(both, four))}/{len(four)};",
-            f"- pairs without `{UNSTEADY}`, both named: {sum(map(both, rest))}/{len(rest)};",
+            f"- pairs of CONTRACTS' four effects, both named: {sum(map(right, four))}/{len(four)};",
+            f"- pairs without `{UNSTEADY}`, both named: {sum(map(right, rest))}/{len(rest)};",
             f"- pairs with `{UNSTEADY}`, the other effect named: {len(other)}/{len(lag)}"
-            f" (both: {sum(map(both, lag))});",
+            f" (both: {sum(map(right, lag))});",
             f"- all pairs so scored: {n_ok}/{len(rows)}."]
 
 

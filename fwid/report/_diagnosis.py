@@ -265,7 +265,7 @@ def plot_gap_sim(d: Diagnosis, path: str | Path | None = None, flight: int = 0) 
         ax.plot(base.t, scale * base.measured[s], "k", lw=1.0, label="measured")
         ax.plot(base.t, scale * base.simulated[s], "C3", lw=1.0,
                 label=f"baseline (RMS {d.simulation['test_rms_before'][s] * scale:.3g})")
-        if aug is not None and d.simulation["test_rms_after"] is not None:
+        if aug is not None:  # None too when the augmented model diverged
             ax.plot(aug.t, scale * aug.simulated[s], "C2", lw=1.0,
                     label=f"+ {' + '.join(d.simulation['effects'])} "
                           f"(RMS {d.simulation['test_rms_after'][s] * scale:.3g})")
