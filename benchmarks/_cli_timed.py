@@ -48,7 +48,7 @@ def main(argv):
     import jax.monitoring
 
     import fwid
-    import fwid.identify  # noqa: F401
+    import fwid.identification  # noqa: F401
     import fwid.report
     from fwid.cli import main as cli
 

@@ -161,7 +161,7 @@ def gust_fem_vs_oem(n_flights: int = 8, strength: float = 1.0, seed: int = 500) 
 
     import fwid
     from fwid import synth
-    from fwid.identify._cycle_averaged import averaged, get_model
+    from fwid.identification._cycle_averaged import averaged, get_model
 
     model = get_model("lon")
     truth = synth.DELFLY.params()

@@ -22,7 +22,7 @@ import numpy as np
 import fwid
 from fwid.estimate import _each
 from fwid.estimate import _output_error as _oe
-from fwid.simulate import stack_experiments
+from fwid.simulation import stack_experiments
 
 from _baseline import fit_output_error
 from _jax_reference import make_fit

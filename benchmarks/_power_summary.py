@@ -39,11 +39,11 @@ def right(r: dict) -> bool | None:
 def tentative_named(r: dict) -> set[str]:
     """The effects of a result named after the first as `tentative` (`effects_detail`; for a
     record written before the flag existed, from its recorded `rounds` by the same rule,
-    `fwid.diagnose._selection.tentative`)."""
+    `fwid.diagnosis._selection.tentative`)."""
     detail = r.get("effects_detail") or []
     if detail and "tentative" in detail[0]:
         return {e["effect"] for e in detail if e.get("tentative")}
-    from fwid.diagnose._selection import tentative
+    from fwid.diagnosis._selection import tentative
 
     rounds, named = r.get("rounds") or [], r.get("effects") or []
     if len(named) < 2 or not rounds:
@@ -74,16 +74,16 @@ def extras(results) -> list[str]:
 
 
 def near_tie(r: dict) -> bool | None:
-    """Was the verdict's effect or probe a near tie (`fwid.diagnose._selection.near_tie`)?
+    """Was the verdict's effect or probe a near tie (`fwid.diagnosis._selection.near_tie`)?
     The record's own `near_tie` (`None` where no row carries the flag: `none`,
     `random-disturbance`); for an older record, from the first effect's row or the
     `unexplained` record, or, written before the flag existed, from its first recorded round
     by the same rule. `None`: nothing was selected."""
     from types import SimpleNamespace as ns
 
-    from fwid.diagnose._catalogue import CATALOGUE
-    from fwid.diagnose._selection import MIN_GAIN, passes, runner_up
-    from fwid.diagnose._selection import near_tie as rule
+    from fwid.diagnosis._catalogue import CATALOGUE
+    from fwid.diagnosis._selection import MIN_GAIN, passes, runner_up
+    from fwid.diagnosis._selection import near_tie as rule
 
     if "near_tie" in r:  # recorded as the user saw it
         return r["near_tie"]

@@ -54,7 +54,7 @@ def _true_rms(flights, band):
     """RMS per load of (measured - exact) loads in `band`, after the diagnosis's own
     filtering: the true model's error (its trim load removed per flight, as the diagnosis
     re-estimates it)."""
-    from fwid.diagnose._signals import signals
+    from fwid.diagnosis._signals import signals
 
     err = {ld: [] for ld in LOADS}
     for f in flights:

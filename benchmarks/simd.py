@@ -47,7 +47,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import fwid  # noqa: E402
-from fwid.simulate._simulate import simulate_sensitivities  # noqa: E402
+from fwid.simulation._simulate import simulate_sensitivities  # noqa: E402
 
 import _measure as M  # noqa: E402
 import _problem as P  # noqa: E402

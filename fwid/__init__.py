@@ -20,8 +20,7 @@ programs in a per-user cache folder (`FWID_JAX_CACHE`; README, 'Compilation cach
 """
 
 import importlib
-import sys
-import types
+from importlib.metadata import version as _version
 
 from ._errors import (
     ExcitationError as ExcitationError,
@@ -34,7 +33,7 @@ from ._errors import (
 )
 from ._jax_setup import on_jax_import as _on_jax_import
 
-__version__ = "0.1.0"
+__version__ = _version("fwid")
 
 _on_jax_import()
 
@@ -44,7 +43,7 @@ EXPORTS = {
         "Flight", "Vehicle", "estimate_trim", "first_input_index", "load_flight", "load_flights",
         "load_vehicle",
     ),
-    "decompose": (
+    "decomposition": (
         "Decomposition", "check_flapping_frequency", "cycle_averaged", "decompose",
         "estimate_flapping_frequency", "flapping_part", "flapping_phase", "highpass", "lowpass",
     ),
@@ -52,7 +51,7 @@ EXPORTS = {
         "GreyBoxModel", "combined", "estimate_phase_offset", "force_parts", "fourier_model",
         "fourier_series", "shift_phase", "heading_rate", "lateral", "longitudinal",
     ),
-    "simulate": (
+    "simulation": (
         "RK4", "Experiment", "experiment", "simulate", "simulate_forces", "stack_experiments",
         "unstack_experiments",
     ),
@@ -61,7 +60,7 @@ EXPORTS = {
         "fit_shooting", "fit_filter_error", "FilterErrorResult", "steady_state_gain",
         "initialize_distributed",
     ),
-    "diagnose": (
+    "diagnosis": (
         "CATALOGUE", "Diagnosis", "diagnose",
     ),
     "validate": (
@@ -71,7 +70,7 @@ EXPORTS = {
         "cutoff_cost", "eigenvalue_sensitivity", "estimate_sensitivity_to_cutoff",
         "metric_sensitivity", "output_sensitivity", "rank_sensitivities",
     ),
-    "identify": (
+    "identification": (
         "CombinedIdentification", "FlappingIdentification", "FlightFit", "Identification",
         "JointComparison", "SteadyVsManoeuvre", "compare_joint", "evaluate", "identify",
         "identify_combined", "identify_flapping_model", "steady_vs_manoeuvre",
@@ -88,17 +87,6 @@ __all__ = ["__version__", "DiagnosisWarning", "ExcitationError", "FitDivergedErr
            "FlightDataError", "FwidError", "InputError", *_STAGE]
 
 
-class _Package(types.ModuleType):
-    """`fwid` itself. Importing a stage named like one of its functions (`fwid.simulate`,
-    `fwid.identify`, `fwid.diagnose`, `fwid.decompose`) leaves the function as the attribute,
-    as it was when `fwid/__init__` imported everything."""
-
-    def __setattr__(self, name, value):
-        if name in _STAGE and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
 def __getattr__(name):
     if name in _STAGE:
         value = getattr(importlib.import_module(f".{_STAGE[name]}", __name__), name)
@@ -112,5 +100,3 @@ def __getattr__(name):
 def __dir__():
     return sorted({*globals(), *__all__, *_SUBPACKAGES})
 
-
-sys.modules[__name__].__class__ = _Package

@@ -8,11 +8,12 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "fwid"
 
-# data -> decompose -> models -> simulate -> estimate -> validate / sensitivity -> identify
-# -> diagnose -> report -> cli. `synth` (the embedded simulator) stands beside `data`, on its
-# own; `_errors` and `_jax_setup` are the ground floor.
-STAGES = ["_errors", "_jax_setup", "data", "decompose", "models", "simulate", "estimate",
-          "validate", "sensitivity", "identify", "diagnose", "report", "cli"]
+# data -> reconstruction -> decomposition -> models -> simulation -> estimate -> validate /
+# sensitivity -> design -> identification -> diagnosis -> report -> cli. `synth` (the embedded
+# simulator) stands beside `data`, on its own; `_errors` and `_jax_setup` are the ground floor.
+STAGES = ["_errors", "_jax_setup", "data", "reconstruction", "decomposition", "models",
+          "simulation", "estimate", "validate", "sensitivity", "design", "identification",
+          "diagnosis", "report", "cli"]
 RANK = {s: i for i, s in enumerate(STAGES)}
 RANK["synth"] = RANK["data"]
 RANK["_jax_setup"] = RANK["_errors"] = 0
@@ -85,11 +86,11 @@ def test_the_check_sees_an_upward_import(tmp_path):
     """The walker above finds relative and absolute upward imports, also inside functions."""
     pkg = tmp_path / "fwid"
     (pkg / "validate").mkdir(parents=True)
-    src = ("from ..identify import x\n"
+    src = ("from ..identification import x\n"
            "def f():\n    from fwid.report import y\n    from . import _metrics\n")
     (pkg / "validate" / "_bad.py").write_text(src)
     found = list(_imports(pkg / "validate" / "_bad.py", pkg))
-    assert [t for _, t in found] == ["identify", "report", "validate"]
+    assert [t for _, t in found] == ["identification", "report", "validate"]
 
 
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
@@ -101,3 +102,13 @@ def test_module_size(path):
 def test_no_private_jax_api():
     offenders = [str(p.relative_to(PACKAGE)) for p in _modules() if "jax._src" in p.read_text()]
     assert not offenders, f"modules reaching into JAX's private API: {offenders}"
+
+
+def test_no_subpackage_is_named_like_a_public_name():
+    """A subpackage and a function of one name leave a reader guessing which `fwid.x` is
+    meant (and `import fwid.x._y` would replace the function by the module)."""
+    import fwid
+
+    subpackages = {p.parent.name for p in PACKAGE.glob("*/__init__.py")}
+    clash = subpackages & set(fwid.__all__)
+    assert not clash, f"subpackages named like public names of fwid: {sorted(clash)}"

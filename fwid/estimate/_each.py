@@ -14,8 +14,8 @@ from jax.sharding import PartitionSpec
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
-from ..simulate._buckets import bucket_length
-from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
+from ..simulation._buckets import bucket_length
+from ..simulation._experiment import Experiment, stack_experiments, with_measured_x0
 from ._devices import (
     device_count,
     flight_mesh,
@@ -79,7 +79,7 @@ def fit_each(
 ) -> list[FitResult]:
     """Fit `model` to each experiment on its own, all in one vmapped call (output error).
 
-    The flights are padded to a common length, one of a few (`fwid.simulate.bucket_length`),
+    The flights are padded to a common length, one of a few (`fwid.simulation.bucket_length`),
     and masked (a padded sample never enters a cost), so one compiled estimator serves every
     flight, and flights of a new length mostly reuse it, and the whole batch runs as a single
     XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]

@@ -39,7 +39,7 @@ from jaxtyping import Array, Float
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment, stack_experiments
+from ..simulation._experiment import Experiment, stack_experiments
 from ._gauss_newton import NoiseModel, noise_covariance, solve_relaxed
 from ._noise import check_noise
 from ._output_error import FitResult, _free_layout, _merge_batch, _prepare, flight_params

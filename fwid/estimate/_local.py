@@ -6,8 +6,8 @@ import numpy as np
 
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment
-from ..simulate._simulate import simulate
+from ..simulation._experiment import Experiment
+from ..simulation._simulate import simulate
 
 
 def refit_local_affine(model: GreyBoxModel, exp: Experiment, *, passes: int = 20):

@@ -14,10 +14,10 @@ from jaxtyping import Array, Bool, Float, Int
 
 from .._errors import ExcitationError, FitDivergedError
 from ..models._greybox import GreyBoxModel
-from ..simulate._buckets import bucket_length, pad_experiment
-from ..simulate._checks import check_experiment
-from ..simulate._experiment import Experiment, stack_experiments, with_measured_x0
-from ..simulate._simulate import simulate, simulate_sensitivities
+from ..simulation._buckets import bucket_length, pad_experiment
+from ..simulation._checks import check_experiment
+from ..simulation._experiment import Experiment, stack_experiments, with_measured_x0
+from ..simulation._simulate import simulate, simulate_sensitivities
 from . import _exported as exported
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed

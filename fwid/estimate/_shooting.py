@@ -36,8 +36,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment
-from ..simulate._simulate import simulate
+from ..simulation._experiment import Experiment
+from ..simulation._simulate import simulate
 from ._gauss_newton import ml_cost, noise_covariance
 from ._noise import check_noise, fall_back
 from ._uncertainty import correlation, lag1_autocorrelation

@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment
+from ..simulation._experiment import Experiment
 from ._regression import derivative, gauss_newton_lstsq, stacked
 from ._start_outputs import nominal_start, output_equation_start
 

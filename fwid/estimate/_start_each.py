@@ -3,7 +3,7 @@
 [`least_squares_start`][] on one flight runs a few Gauss-Newton steps, each a compiled
 residual and Jacobian and a least-squares solve on the host, flight after flight. For
 [`fwid.fit_each`][], [`least_squares_start_each`][] does the same for all flights at once:
-the flights are padded to a common length, one of a few (`fwid.simulate.bucket_length`;
+the flights are padded to a common length, one of a few (`fwid.simulation.bucket_length`;
 a padded sample carries no weight) and the whole start, the force regression and then the state
 regression, with the solves, is one XLA computation `vmap`ped over the flights: one
 compilation per model and batch shape, not a dispatch per step and flight. The estimates
@@ -20,8 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
-from ..simulate._buckets import bucket_length
-from ..simulate._experiment import Experiment, stack_experiments
+from ..simulation._buckets import bucket_length
+from ..simulation._experiment import Experiment, stack_experiments
 from ._regression import derivative as _derivative
 from ._start_outputs import nominal_start
 

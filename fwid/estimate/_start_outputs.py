@@ -22,7 +22,7 @@ import numpy as np
 
 from .._errors import FitWarning
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment
+from ..simulation._experiment import Experiment
 from ._regression import derivative, gauss_newton_lstsq, stacked
 
 

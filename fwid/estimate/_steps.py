@@ -8,7 +8,7 @@ linearly interpolated: its mean at the half step), `fwid.RK4` stepped by hand
 
 from __future__ import annotations
 
-from ..simulate._rk4 import step_interval
+from ..simulation._rk4 import step_interval
 
 
 def rk4_step(f, x, u0, u1, dt, params, consts):

@@ -4,7 +4,7 @@ $$F_{TV}(t) = \\sum_{n=1}^{h} a_n \\sin(n \\varphi(t)) + b_n \\cos(n \\varphi(t)
 \\qquad \\varphi(t) = \\int_0^t 2 \\pi f(s)\\, ds$$
 
 The paper writes `2 pi n f t` with the measured flapping frequency `f`; fwid drives the series
-with the flapping *phase* (see [`fwid.decompose.flapping_phase`][]), which is the same for a
+with the flapping *phase* (see [`fwid.decomposition.flapping_phase`][]), which is the same for a
 constant `f` and stays in step with the wing beat when `f` drifts.
 
 The model is a static input-output [`fwid.GreyBoxModel`][] (no states): input `phase`,

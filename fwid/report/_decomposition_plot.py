@@ -54,7 +54,7 @@ def plot_decomposition(
     - `t`: time [s], uniformly sampled.
     - `raw`: the measurements before filtering, by name (a dict or a `fwid.data.Flight`), or
       `None`.
-    - `decomposition`: a [`fwid.decompose.Decomposition`][] of the same samples.
+    - `decomposition`: a [`fwid.decomposition.Decomposition`][] of the same samples.
     - `names`: the signals to plot, e.g. `("X", "Y", "Z")`.
     - `path`: if given, the figure is also written there (format from the suffix, e.g. `.png`).
 

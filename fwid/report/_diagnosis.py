@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..diagnose import BAND_NAMES, Diagnosis
-from ..diagnose._selection import RATES_MARGIN
-from ..diagnose._signals import AXIS_LOADS
+from ..diagnosis import BAND_NAMES, Diagnosis
+from ..diagnosis._selection import RATES_MARGIN
+from ..diagnosis._signals import AXIS_LOADS
 
 _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
 

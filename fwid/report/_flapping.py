@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..identify._combined import CombinedIdentification
-from ..identify._flapping import FlappingIdentification
+from ..identification._combined import CombinedIdentification
+from ..identification._flapping import FlappingIdentification
 from ..models._fourier import fourier_param_names, fourier_structure
 from ..models._greybox import GreyBoxModel
 from ..validate._modes import modes

@@ -3,7 +3,7 @@ validate better on held-out flights than the individual fits?"""
 
 from __future__ import annotations
 
-from ..identify._joint import JointComparison
+from ..identification._joint import JointComparison
 from ..validate._modes import eigenvalues, modes
 from ._identification import modes_spread
 

@@ -14,8 +14,8 @@ import jax
 import jax.numpy as jnp
 
 from ..models._greybox import GreyBoxModel, Params
-from ..simulate._experiment import Experiment
-from ..simulate._simulate import simulate
+from ..simulation._experiment import Experiment
+from ..simulation._simulate import simulate
 
 _WRT = ("params", "consts", "x0")
 

@@ -14,8 +14,8 @@ from ..data._flight import Flight
 from ..estimate._gauss_newton import NoiseModel, ml_cost
 from ..estimate._output_error import FitResult, _free_layout, _merge_batch, _raw_residuals
 from ..models._greybox import GreyBoxModel
-from ..simulate._averaged import averaged
-from ..simulate._experiment import Experiment
+from ..simulation._averaged import averaged
+from ..simulation._experiment import Experiment
 
 
 def _stack_traced(exps: Sequence[Experiment]) -> Experiment:

@@ -10,7 +10,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment
+from ..simulation._experiment import Experiment
 from ._common import _check_single, _full_params, _pick_names, output_jacobian
 
 METRICS = ("cost", "rms", "rms_pct", "r2", "corr")

@@ -8,7 +8,7 @@ from collections.abc import Mapping, Sequence
 from jaxtyping import Array, Float
 
 from ..models._greybox import GreyBoxModel
-from ..simulate._experiment import Experiment
+from ..simulation._experiment import Experiment
 from ._common import _WRT, _check_single, _full_params, _pick_names, output_jacobian
 
 

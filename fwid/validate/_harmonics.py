@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from ..decompose._filters import highpass
-from ..decompose._frequency import flapping_phase
-from ..decompose._split import edge_samples
+from ..decomposition._filters import highpass
+from ..decomposition._frequency import flapping_phase
+from ..decomposition._split import edge_samples
 
 
 def _phase_of(f, n: int, dt: float) -> np.ndarray:

@@ -285,7 +285,7 @@ def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatc
     import functools
     import importlib
 
-    pipeline = importlib.import_module("fwid.identify._cycle_averaged")
+    pipeline = importlib.import_module("fwid.identification._cycle_averaged")
     monkeypatch.setattr(pipeline, "fit", functools.partial(pipeline.fit, max_steps=1))
     with pytest.warns(UserWarning, match="did not converge"):
         rc = main(["identify", str(flights / "lon_0.csv"), "--model", "lon",

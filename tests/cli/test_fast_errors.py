@@ -90,7 +90,7 @@ def test_bad_input_exits_2_without_jax(tmp_path, good, case):
 def test_column_lists_match_the_models():
     """The columns the command line checks before JAX are the models' own."""
     import fwid
-    from fwid.diagnose._signals import REQUIRED
+    from fwid.diagnosis._signals import REQUIRED
 
     for name, model in (("lon", fwid.longitudinal()), ("lat", fwid.lateral())):
         assert set(IDENTIFY_COLUMNS[name]) == set(model.states) | set(model.inputs)

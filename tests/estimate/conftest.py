@@ -9,7 +9,7 @@ import pytest
 
 import fwid  # noqa: F401  (float64)
 from fwid.models import TABLE1, TABLE4, lateral, longitudinal
-from fwid.simulate import Experiment, simulate, simulate_forces
+from fwid.simulation import Experiment, simulate, simulate_forces
 
 DT = 0.005
 N = 901  # 4.5 s at 200 Hz

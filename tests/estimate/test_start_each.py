@@ -9,7 +9,7 @@ import fwid  # noqa: F401  (float64)
 from fwid.estimate import least_squares_start
 from fwid.estimate._start_each import least_squares_start_each
 from fwid.models import lateral, longitudinal
-from fwid.simulate import Experiment
+from fwid.simulation import Experiment
 
 
 def _noisy(flight, seed, n, forces=True):

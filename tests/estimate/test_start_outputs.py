@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import fwid
-from fwid.simulate._experiment import with_measured_x0
+from fwid.simulation._experiment import with_measured_x0
 
 T = np.arange(500) * 0.02
 DE = 0.05 * np.sin(1.3 * T) + 0.03 * np.sin(3.7 * T)

@@ -7,7 +7,7 @@ import pytest
 import fwid  # noqa: F401  (float64)
 from fwid.estimate import least_squares_start
 from fwid.models import TABLE1, TABLE4, GreyBoxModel, heading_rate, lateral, longitudinal
-from fwid.simulate import Experiment, simulate
+from fwid.simulation import Experiment, simulate
 
 LON_C = dict(mass=0.0187, Iy=7.3e-5, g=9.81, u0=0.41, w0=0.83, theta0=1.31)
 LAT_C = dict(mass=0.0187, Ix=8.1e-5, Iz=2.7e-5, Ixz=3.3e-6, g=9.81, u0=0.41, w0=0.83,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import fwid
-from fwid.identify import flapping_data
+from fwid.identification import flapping_data
 from fwid.data import Flight
 from fwid.models._fourier import (
     estimate_phase_offset,

@@ -6,7 +6,7 @@ from matplotlib.figure import Figure
 
 import fwid  # noqa: F401  (turns on float64)
 from fwid import InputError
-from fwid.decompose import decompose
+from fwid.decomposition import decompose
 from fwid.report._decomposition_plot import plot_decomposition
 
 DT = 1 / 200

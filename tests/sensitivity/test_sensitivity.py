@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import fwid
-from fwid.simulate import averaged
+from fwid.simulation import averaged
 from fwid.synth import write_flights
 from fwid.sensitivity import (
     cutoff_cost,

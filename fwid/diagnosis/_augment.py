@@ -1,0 +1,187 @@
+"""The diagnosed effects inside the equations of motion: the grey-box model of Eqs. (7-8)
+augmented, so that the output-error estimator (Eqs. 10-11) can re-fit it and the gap can be
+measured where a user sees it, in the simulated states.
+
+Each effect of the verdict becomes terms of the cycle-averaged model:
+
+- `actuator-dynamics` and `time-offset`: the acting deflection, the measured one through the
+  diagnosed lag or delay (a lead for `time-offset`), replaces it as the model's input
+  (`d_eff`, a prepared column; the time constant is the diagnosis's, the control derivative
+  is re-estimated);
+- `unsteady-aero`: the lagging part `lag(x) - x` of the axis's measured states (the
+  diagnosed time constant; prepared columns `u_lag`, ...) as extra inputs, with a derivative
+  per own load (`Mw_lag`, ...: Eqs. 1-6 with a lagging share);
+- `flap-frequency`: the measured flapping frequency's deviation from its median, and its
+  square, as extra inputs with a derivative per own load (`Xf`, `Xff`, ...); the frequency
+  lag, when one was diagnosed, is applied to the prepared column;
+- `lon-lat-coupling`: the other axis's measured states and control as extra inputs, with a
+  derivative per own load (`Xv`, `Mdr`, `Lq`, ...: Eqs. 1-6 with the cross terms);
+- `nonlinear-aero`: the quadratic terms of `_catalogue.py` in the *simulated* states, with a
+  coefficient per own load (`M_qq`, `Z_w|w|`, `X_uw`, ...);
+- the probe `attitude`: a derivative of each own load on the attitude state (`Mtheta`);
+- the probe `drift`: the time since the flight's start (per 10 s) and its square as extra
+  inputs, with a coefficient per own load (`Xtime`, `Xtime2`, ...), as the probe fits them.
+
+The extra loads enter the EOM exactly as the aerodynamic ones do (divided by the mass, or
+through the inertia matrix), and the force model used for the least-squares start carries
+them too. `flap-coupling` acts on the flapping part, which the cycle-averaged simulation
+does not contain: it is left out (the result says so).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..data import Flight
+from ..identification import get_model
+from ..models import GreyBoxModel
+from ._catalogue import frequency_deviation, lagged, lagging_part
+from ._probes import ATTITUDE, elapsed
+from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
+
+#: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
+IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
+          "lon-lat-coupling", "nonlinear-aero", "attitude", "drift")
+
+
+def _quadratic_terms(axis: str) -> list[tuple[str, Callable]]:
+    xs = AXIS_STATES[axis]
+    out = []
+    for i, a in enumerate(xs):
+        out.append((f"{a}{a}", lambda s, i=i: s[i] * s[i]))
+        out.append((f"{a}|{a}|", lambda s, i=i: s[i] * jnp.abs(s[i])))
+    for i in range(len(xs)):
+        for j in range(i + 1, len(xs)):
+            out.append((f"{xs[i]}{xs[j]}", lambda s, i=i, j=j: s[i] * s[j]))
+    return out
+
+
+def _load_rates(axis: str, dF, c):
+    """State derivatives of extra loads `dF` (the axis's loads in `AXIS_LOADS` order), as the
+    aerodynamic loads enter Eq. (7) (lon: q u w theta) or Eq. (8) (lat: p r v phi)."""
+    if axis == "lon":
+        dX, dZ, dM = dF
+        return jnp.stack([dM / c["Iy"], dX / c["mass"], dZ / c["mass"], 0.0 * dM])
+    dY, dL, dN = dF
+    Ix, Iz, Ixz = c["Ix"], c["Iz"], c["Ixz"]
+    Ic = Ix * Iz - Ixz**2
+    return jnp.stack([(Iz * dL + Ixz * dN) / Ic, (Ixz * dL + Ix * dN) / Ic, dY / c["mass"],
+                      0.0 * dY])
+
+
+def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[str, str]:
+    """What each input that `augment`'s `prepare` adds to a flight is (so the augmented model
+    can be applied to new flights): the diagnosed constants written out."""
+    ctrl, out = AXIS_INPUT[axis], {}
+    for name, variant in effects:
+        if name == "actuator-dynamics":
+            kind, tau = variant
+            out[f"{ctrl}_eff"] = (f"{ctrl} minus its trim through a first-order lag, tau = "
+                                  f"{tau:g} s" if kind == "lag" else
+                                  f"{ctrl} minus its trim, delayed {tau:g} s")
+        elif name == "time-offset":
+            out[f"{ctrl}_eff"] = f"{ctrl} minus its trim, shifted {float(variant):g} s earlier"
+        elif name == "unsteady-aero":
+            for s in AXIS_STATES[axis]:
+                out[f"{s}_lag"] = (f"lag({s}) - {s}: {s} through a first-order lag of tau = "
+                                   f"{float(variant):g} s, minus {s}")
+        elif name == "flap-frequency":
+            lag = f" through a first-order lag of {float(variant):g} s" if variant else ""
+            out["f_dev"] = f"f minus its median over the flight{lag}"
+            out["f_dev2"] = "f_dev squared"
+        elif name == "drift":
+            out["time"] = "time since the flight's first sample / 10 s"
+            out["time2"] = "time squared"
+    return out
+
+
+def augment(axis: str, effects: Sequence[tuple[str, object]]
+            ) -> tuple[GreyBoxModel, Callable[[Flight], Flight], list[str]]:
+    """The `axis` model (`fwid.longitudinal`/`fwid.lateral`) with `effects` (`(name,
+    variant)` pairs as the diagnosis selected them) inside its EOM.
+
+    **Returns:** `(model, prepare, left_out)`: `prepare(flight)` adds the columns the model
+    reads (the acting deflection), `left_out` the effects that have no cycle-averaged form.
+    """
+    base = get_model(axis)
+    loads = AXIS_LOADS[axis]
+    state_index = {s: k for k, s in enumerate(base.states)}
+    ctrl = AXIS_INPUT[axis]
+    control = ctrl
+    shift = None  # (kind, tau) applied to the control column
+    extra_inputs: list[str] = []
+    terms: list[tuple[str, Callable]] = []  # (suffix, g(x, u_extra)) per own load
+    left_out = []
+    columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
+
+    def add_input(name, column):
+        j = len(extra_inputs)
+        extra_inputs.append(name)
+        if column is not None:
+            columns[name] = column
+        terms.append((name, lambda x, ue, j=j: ue[j]))
+
+    for name, variant in effects:
+        if name in ("actuator-dynamics", "time-offset"):
+            shift = variant if name == "actuator-dynamics" else ("delay", -float(variant))
+            control = f"{ctrl}_eff"
+        elif name == "unsteady-aero":
+            for s in AXIS_STATES[axis]:
+                add_input(f"{s}_lag", lambda fl, s=s, tau=float(variant): lagging_part(
+                    np.asarray(fl[s], dtype=float), fl.dt, tau))
+        elif name == "flap-frequency":
+            tau = float(variant or 0.0)
+            add_input("f_dev", lambda fl, tau=tau: frequency_deviation(
+                np.asarray(fl["f"], dtype=float), fl.dt, tau))
+            add_input("f_dev2", lambda fl, tau=tau: frequency_deviation(
+                np.asarray(fl["f"], dtype=float), fl.dt, tau) ** 2)
+        elif name == "lon-lat-coupling":
+            o = other(axis)
+            for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
+                add_input(s, None)
+        elif name == "nonlinear-aero":
+            xs_idx = [state_index[s] for s in AXIS_STATES[axis]]
+            for suffix, g in _quadratic_terms(axis):
+                terms.append((f"_{suffix}", lambda x, ue, g=g: g(x[jnp.array(xs_idx)])))
+        elif name == "drift":
+            add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))
+            add_input("time2", lambda fl: elapsed(np.asarray(fl.t, dtype=float)) ** 2)
+        elif name == "attitude":
+            k = state_index[ATTITUDE[axis]]
+            terms.append((ATTITUDE[axis], lambda x, ue, k=k: x[k]))
+        else:
+            left_out.append(name)
+    new = [f"{ld}{suffix}" for suffix, _ in terms for ld in loads]
+
+    def extra_loads(x, u, p):
+        ue = u[1:]
+        return [sum((p[f"{ld}{suffix}"] * g(x, ue) for suffix, g in terms), 0.0 * x[0])
+                for ld in loads]
+
+    def f(x, u, p, c):
+        return base.f(x, u[:1], p, c) + _load_rates(axis, extra_loads(x, u, p), c)
+
+    def forces(x, u, p, c):
+        return base.forces(x, u[:1], p, c) + jnp.stack(extra_loads(x, u, p))
+
+    params = {k: float(v) for k, v in base.params.items()}
+    params.update({k: 0.0 for k in new})
+    model = GreyBoxModel(
+        f, states=base.states, inputs=(control, *extra_inputs), params=params,
+        free=tuple(base.free) + tuple(new), constants=base.constants, forces=forces,
+        force_names=base.force_names, local=base.local,
+        name=base.name + "+" + "+".join(n for n, _ in effects if n not in left_out),
+    )
+
+    def prepare(flight: Flight) -> Flight:
+        new = {k: g(flight) for k, g in columns.items()}
+        if shift is not None:
+            d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
+            kind, tau = shift
+            new[control] = lagged(d, flight.dt, kind, tau)
+        return flight.with_columns(**new) if new else flight
+
+    return model, prepare, left_out

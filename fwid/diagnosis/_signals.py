@@ -1,0 +1,126 @@
+"""What the diagnosis sees of a flight: cycle-averaged perturbations, flapping phase, loads."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+
+from .._errors import InputError
+from ..data import Flight
+from ..decomposition import decompose, flapping_phase
+
+#: Loads of each axis and the cycle-averaged signals their linear model uses (Eqs. 2-6).
+AXIS_LOADS = {"lon": ("X", "Z", "M"), "lat": ("Y", "L", "N")}
+AXIS_STATES = {"lon": ("u", "w", "q"), "lat": ("v", "p", "r")}
+AXIS_INPUT = {"lon": "de", "lat": "dr"}
+#: Signals that must exist for an axis to be diagnosed.
+REQUIRED = {
+    "lon": ("u", "w", "q", "theta", "de", "f", "X", "Z", "M"),
+    "lat": ("v", "p", "r", "phi", "dr", "f", "Y", "L", "N"),
+}
+#: Seconds dropped at each end (edge effects of the zero-phase filters).
+EDGE = 0.2
+
+
+def other(axis: str) -> str:
+    return "lat" if axis == "lon" else "lon"
+
+
+@dataclasses.dataclass(frozen=True)
+class Signals:
+    """One flight (or one block of a flight) prepared for the diagnosis.
+
+    - `slow`: cycle-averaged perturbations (below the 5 Hz split, Section III.B) of every
+      state and input present, by name; `fast`: their parts above the split.
+    - `loads`: the measured loads split as in Section III.B, `loads[band][load]` with `band`
+      one of `BANDS`: `"averaged"` (below the split) and `"flapping"` (the harmonics).
+    - `phase`: the flapping phase `int 2 pi f dt` (drives Eq. 12).
+    - `manoeuvre`: True from the first input on.
+    """
+
+    name: str
+    t: np.ndarray
+    dt: float
+    phase: np.ndarray
+    f_mean: float
+    f_spread: float
+    slow: dict[str, np.ndarray]
+    fast: dict[str, np.ndarray]
+    loads: dict[str, dict[str, np.ndarray]]
+    manoeuvre: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.t)
+
+    def block_rows(self, i: int, count: int) -> tuple[int, int]:
+        """First and one-past-last sample of block `i` of `count` contiguous blocks."""
+        edges = np.linspace(0, self.n, count + 1).astype(int)
+        return int(edges[i]), int(edges[i + 1])
+
+    def block(self, i: int, count: int) -> Signals:
+        """Block `i` of `count` contiguous blocks (a scoring unit)."""
+        s = slice(*self.block_rows(i, count))
+        return Signals(
+            name=f"{self.name}[{i + 1}/{count}]",
+            t=self.t[s],
+            dt=self.dt,
+            phase=self.phase[s],
+            f_mean=self.f_mean,
+            f_spread=self.f_spread,
+            slow={k: v[s] for k, v in self.slow.items()},
+            fast={k: v[s] for k, v in self.fast.items()},
+            loads={b: {k: v[s] for k, v in d.items()} for b, d in self.loads.items()},
+            manoeuvre=self.manoeuvre[s],
+        )
+
+
+SLOW = ("u", "w", "q", "theta", "v", "p", "r", "phi", "de", "dr", "f")
+LOADS = ("X", "Y", "Z", "L", "M", "N")
+#: The two parts of the loads (Section III.B).
+BANDS = ("averaged", "flapping")
+
+
+def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
+    """Prepare `flight` for the diagnosis (see `Signals`); `EDGE` s are dropped at each end."""
+    dt = flight.dt
+    names = [c for c in SLOW + LOADS if c in flight and c != "f"]
+    parts = decompose({c: flight[c] for c in names}, dt, split_cutoff=cutoff)
+    keep = slice(round(EDGE / dt), flight.n - round(EDGE / dt))
+    f = np.asarray(flight["f"], dtype=float)
+    phase = np.asarray(flapping_phase(f, dt))
+    slow = {c: np.asarray(parts.averaged[c] - flight.trim_value(c))[keep]
+            for c in SLOW if c in names}
+    slow["f"] = f[keep] - np.mean(f)
+    fast = {c: np.asarray(parts.flapping[c])[keep] for c in SLOW if c in names}
+    loads = {
+        "averaged": {c: np.asarray(parts.averaged[c])[keep] for c in LOADS if c in names},
+        "flapping": {c: np.asarray(parts.flapping[c])[keep] for c in LOADS if c in names},
+    }
+    t = np.asarray(flight.t)[keep]
+    manoeuvre = np.arange(flight.n)[keep] >= flight.first_input
+    return Signals(
+        name=flight.name,
+        t=t,
+        dt=dt,
+        phase=phase[keep],
+        f_mean=float(np.mean(f)),
+        f_spread=float(np.ptp(f)),
+        slow=slow,
+        fast=fast,
+        loads=loads,
+        manoeuvre=manoeuvre,
+    )
+
+
+def check_axis(flights: Sequence[Flight], axis: str, role: str) -> None:
+    """Every flight has what the diagnosis of `axis` needs; else an `InputError` naming the
+    flight and the missing columns (`Flight.require`)."""
+    if axis not in REQUIRED:
+        raise InputError(f"axis must be 'lon' or 'lat', got {axis!r}")
+    if not flights:
+        raise InputError(f"no {role} flights given")
+    for fl in flights:
+        fl.require(REQUIRED[axis])

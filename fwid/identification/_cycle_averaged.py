@@ -1,0 +1,146 @@
+"""The cycle-averaged pipeline (Section IV): flights -> cycle-averaged data -> output-error
+fit (Eqs. 10-11) -> modes and validation."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._errors import InputError
+from ..data._flight import Flight
+from ..estimate._each import fit_each
+from ..estimate._output_error import FitResult, fit
+from ..models._delfly import lateral, longitudinal
+from ..models._greybox import GreyBoxModel
+from ..simulation._averaged import averaged
+from ..validate._modes import eigenvalues, modes
+from ..validate._state_space import StateSpace, state_space
+from ._flight_fit import FlightFit, evaluate
+
+MODELS = {"lon": longitudinal, "lat": lateral}
+
+
+@dataclass(frozen=True, repr=False)
+class Identification:
+    """What [`fwid.identify`][] found: the fit(s), their modes and their metrics."""
+
+    model: GreyBoxModel
+    flights: list[str]
+    fits: list[FitResult]
+    estimation: list[FlightFit]
+    validation: list[FlightFit] = field(default_factory=list)
+    joint: bool = False
+    consts: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def fit(self) -> FitResult:
+        return self.fits[0]
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        return eigenvalues(self.model, self.consts)
+
+    @property
+    def modes(self) -> list[dict]:
+        return modes(self.eigenvalues)
+
+    def state_space(self, flight: int | None = None) -> StateSpace:
+        """The identified model as `x' = A x + B u`, `y = C x + D u` at the trim, with named
+        states, inputs and outputs ([`fwid.StateSpace`][]: `.to_scipy()`, `.to_control()`).
+        `flight`: the model of that estimation flight's own fit (default: the summary model,
+        the mean of the per-flight estimates or the joint fit)."""
+        model = self.model if flight is None else (
+            self.fits[flight].model if len(self.fits) > 1 else self.model)
+        return state_space(model, self.consts)
+
+    def __repr__(self) -> str:
+        conv = sum(bool(f.converged) for f in self.fits)
+        osc = [m for m in self.modes if m["kind"] == "oscillatory"]
+        mode = (f", oscillatory mode wn={osc[0]['wn']:.3g} rad/s zeta={osc[0]['zeta']:.3g}"
+                if osc else "")
+        return (f"Identification(model={self.model.name!r}, flights={self.flights}, "
+                f"{'joint' if self.joint else 'per-flight'} fit(s): {conv}/{len(self.fits)} "
+                f"converged, {len(self.model.free)} free parameters{mode}, "
+                f"validation flights={[v.name for v in self.validation]})")
+
+
+def get_model(model: str | GreyBoxModel) -> GreyBoxModel:
+    if isinstance(model, GreyBoxModel):
+        return model
+    try:
+        return MODELS[model]()
+    except KeyError:
+        raise InputError(
+            f"unknown model {model!r}: choose one of {', '.join(MODELS)} or pass a GreyBoxModel"
+        ) from None
+
+
+def _mean_model(model: GreyBoxModel, fits: Sequence[FitResult]) -> GreyBoxModel:
+    values = {k: float(np.mean([float(f.model.params[k]) for f in fits])) for k in model.free}
+    return model.with_params(values)
+
+
+def _say_missing_forces(model: GreyBoxModel, flights: Sequence[Flight]) -> None:
+    """A model with a force model fitted to flights without the force columns: the fit still
+    runs on the states, but starts differently and reports no force metrics. Say so."""
+    if not model.force_names:
+        return
+    lacking = [f.name for f in flights if not all(c in f for c in model.force_names)]
+    if lacking:
+        warnings.warn(
+            f"{', '.join(lacking)}: no force/moment columns {' '.join(model.force_names)}; the "
+            f"{model.name} model is fitted to the states alone, from the state-derivative "
+            "regression start instead of the reconstructed forces (Sec. IV.B), and no force "
+            "metrics are reported. Add the columns (README, 'Your own flights') to use them.",
+            UserWarning, stacklevel=3)
+
+
+def identify(
+    flights: Sequence[Flight],
+    model: str | GreyBoxModel = "lon",
+    *,
+    validate: Sequence[Flight] = (),
+    joint: bool = False,
+    cutoff: float = 5.0,
+    noise_cutoff: float = 40.0,
+    start: str | GreyBoxModel = "least-squares",
+    progress: bool = False,
+) -> Identification:
+    """Identify the cycle-averaged model from flights, as in the paper's Section IV.
+
+    Each flight is split (Sec. III.B) and its cycle-averaged part, inputs included, is fitted
+    by output-error ML (Eqs. 10-11) from a least-squares start. Without `joint`, each flight
+    gets its own fit (the paper's practice) and the summary model is the mean of their
+    estimates; with `joint`, one parameter set is fitted to all flights together, each with
+    its own initial state, trim and bias terms. Validation flights are simulated with the
+    summary model, their bias terms re-estimated. `start` is passed to [`fwid.fit`][]:
+    `"least-squares"`, `"model"` (the model's values) or a model whose values to start from.
+    """
+    model = get_model(model)
+    flights = list(flights)
+    if not flights:
+        raise InputError("no flights to identify from")
+    _say_missing_forces(model, list(flights) + list(validate))
+    exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]
+    names = [f.name for f in flights]
+    if joint or len(exps) == 1:
+        fits = [fit(model, exps, names=names, start=start, progress=progress)]
+        summary = fits[0].model
+        estimation = []
+        for i, (e, n) in enumerate(zip(exps, names)):
+            estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
+    else:
+        fits = fit_each(model, exps, names=names, start=start, progress=progress)
+        summary = _mean_model(model, fits)
+        estimation = [evaluate(f.model, e, n, refit_local=False)
+                      for f, e, n in zip(fits, exps, names)]
+    validation = [
+        evaluate(summary, averaged(f, model, cutoff, noise_cutoff), f.name)
+        for f in validate
+    ]
+    consts = {k: float(v) for k, v in exps[0].consts.items()}
+    return Identification(model=summary, flights=names, fits=fits, estimation=estimation,
+                          validation=validation, joint=joint, consts=consts)

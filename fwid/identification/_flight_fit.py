@@ -1,0 +1,105 @@
+"""A model's response on one flight next to the measurements, and its fit metrics: what every
+pipeline returns per flight (Figures 6, 7, 9, 10, 12, 13, 16, 17)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import FitDivergedError
+from ..estimate._local import refit_local_affine
+from ..estimate._output_error import fit
+from ..models._greybox import GreyBoxModel
+from ..simulation._buckets import pad_experiment
+from ..simulation._experiment import Experiment
+from ..simulation._simulate import simulate, simulate_forces
+from ..validate._metrics import fit_metrics
+
+
+@dataclass(frozen=True, repr=False)
+class FlightFit:
+    """A model's response on one flight, next to the measurements (Figures 6, 7, 9, 10)."""
+
+    name: str
+    t: np.ndarray
+    inputs: dict[str, np.ndarray]
+    measured: dict[str, np.ndarray]
+    simulated: dict[str, np.ndarray]
+    forces_measured: dict[str, np.ndarray]
+    forces_simulated: dict[str, np.ndarray]
+    metrics: dict[str, dict[str, float]]
+    local_params: dict[str, float]
+
+    def __repr__(self) -> str:
+        rms = ", ".join(f"{k} {v['rms_pct']:.1f}%" for k, v in self.metrics.items())
+        return (f"FlightFit({self.name!r}, {len(self.t)} samples, outputs={list(self.measured)}, "
+                f"rms as % of range: {rms})")
+
+
+
+def flight_fit(
+    name: str,
+    t,
+    inputs: Mapping[str, np.ndarray],
+    outputs: Sequence[str],
+    z,
+    y,
+    *,
+    force_names: Sequence[str] = (),
+    forces_measured=None,
+    forces_simulated=None,
+    local: Mapping[str, float] | None = None,
+) -> FlightFit:
+    """A [`fwid.FlightFit`][] from measured `z` and simulated `y` outputs `(n, ny)`, and the
+    measured and simulated forces `(n, nf)` when given; metrics as [`fwid.fit_metrics`][]."""
+    z, y = np.asarray(z), np.asarray(y)
+    metrics = fit_metrics(z, y, outputs)
+    fm, fs = {}, {}
+    if forces_measured is not None and forces_simulated is not None:
+        Fm, F = np.asarray(forces_measured), np.asarray(forces_simulated)
+        fm = {k: Fm[:, j] for j, k in enumerate(force_names)}
+        fs = {k: F[:, j] for j, k in enumerate(force_names)}
+        metrics.update(fit_metrics(Fm, F, force_names))
+    return FlightFit(
+        name=name, t=np.asarray(t), inputs=dict(inputs),
+        measured={k: z[:, j] for j, k in enumerate(outputs)},
+        simulated={k: y[:, j] for j, k in enumerate(outputs)},
+        forces_measured=fm, forces_simulated=fs, metrics=metrics, local_params=dict(local or {}),
+    )
+
+
+def evaluate(
+    model: GreyBoxModel, exp: Experiment, name: str, *, refit_local: bool = True
+) -> FlightFit:
+    """Simulate `model` on one experiment and score it against the measurements.
+
+    With `refit_local`, the model's flight-specific parameters (the bias terms) are first
+    re-estimated on this flight, everything else held at its value: a validation flight has
+    its own trim errors, which the biases exist to absorb.
+    """
+    local = {}
+    n = exp.n
+    padded = pad_experiment(exp)  # one of a few lengths: a new length rarely compiles
+    if refit_local and model.local:
+        # bias terms enter affinely: a weighted linear solve (no second estimator to compile);
+        # the full ML fit of the biases otherwise
+        try:
+            local = refit_local_affine(model, padded)
+        except FitDivergedError as exc:
+            raise FitDivergedError(f"{name}: {exc} (an unstable model, or a term that grows "
+                                   "without bound)") from exc
+        if local is None:
+            r = fit(model.with_free(model.local), exp, names=[name], start="model")
+            local = {k: float(r.model.params[k]) for k in model.local}
+        model = model.with_params(local)
+    xs, ys = simulate(model, padded)  # the padding, simulated after the end, is cut off
+    forces = model.forces is not None and exp.forces is not None
+    return flight_fit(
+        name, exp.t, {k: np.asarray(exp.u[:, j]) for j, k in enumerate(model.inputs)},
+        model.outputs, exp.z, ys[:n], force_names=model.force_names if forces else (),
+        forces_measured=exp.forces if forces else None,
+        forces_simulated=simulate_forces(model, xs, padded)[:n] if forces else None,
+        local=local,
+    )

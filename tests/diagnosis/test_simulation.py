@@ -1,0 +1,165 @@
+"""The gap in the simulated states: the diagnosed effect put into the EOM (`_augment.py`),
+re-fitted by output error on the training flights, simulated on the test flights."""
+
+import json
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import fwid
+from fwid.diagnosis._augment import augment
+from fwid.diagnosis._simulation import simulation_gap
+
+
+def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights, tmp_path):
+    """4 + 4 flights with an actuator lag: the diagnosis names it, and with its lag state in
+    the EOM the test flights' simulated states are at least 20 % closer to the measured ones;
+    the augmented model is returned with standard deviations."""
+    train, test = (fwid.load_flights(p) for p in effect_flights(
+        "actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4))
+    d = fwid.diagnose(train, test)
+    assert d.verdict == "actuator-dynamics"
+    sim = d.simulation
+    assert sim["effects"] == ["actuator-dynamics"] and sim["states"] == ["q", "u", "w", "theta"]
+    assert sim["shrink_pct"] >= 20.0, sim
+    for s in sim["states"]:
+        assert sim["test_rms_after"][s] < sim["test_rms_before"][s]
+    aug = d.models.augmented
+    assert aug is not None and aug.model.inputs == ("de_eff",)
+    table = aug.fits[0].table()
+    assert all(np.isfinite(table[k]["std"]) and table[k]["std"] > 0 for k in ("Mde", "Zde"))
+    assert d.to_json()["simulation"]["shrink_pct"] == sim["shrink_pct"]
+    # which fit stopped at its step limit is said, and the caution points the right way
+    assert sim["converged_baseline"] == all(f.converged for f in d.models.baseline.fits)
+    assert sim["converged_augmented"] == all(f.converged for f in aug.fits)
+    assert sim["converged"] == (sim["converged_baseline"] and sim["converged_augmented"])
+    from fwid.report import diagnosis_summary
+
+    cautions = {(True, True): None, (False, True): "the shrink may be overstated",
+                (True, False): "the shrink may be understated", (False, False): "rough"}
+    for flags, words in cautions.items():
+        sim.update(converged=all(flags), converged_baseline=flags[0],
+                   converged_augmented=flags[1])
+        text = diagnosis_summary(d)
+        assert ("CAUTION" in text) == (words is not None)
+        assert words is None or words in text
+    # what `fwid diagnose --out` writes: the figures and the model to carry on with
+    from fwid.report import write_diagnosis
+
+    written = write_diagnosis(d, tmp_path)
+    assert set(written) == {"diagnosis.json", "gap_map.png", "gap_sim.png",
+                            "augmented_model.json", "augmented_parameters.csv"}
+    rep = json.loads((tmp_path / "augmented_model.json").read_text())
+    assert rep["model"] == "lon+actuator-dynamics" and rep["parameters"]["Mde"]["std"] > 0
+    assert "Mde," in (tmp_path / "augmented_parameters.csv").read_text()
+    # the diagnosed time constant travels with the model, and `prepare` applies it anew
+    assert "first-order lag, tau = " in rep["prepared_inputs"]["de_eff"]
+    assert "de_eff" in d.models.prepare(train[0]).columns
+    assert json.loads((tmp_path / "diagnosis.json").read_text())["simulation"]["effects"] == [
+        "actuator-dynamics"]
+
+
+def test_no_shrink_from_an_effect_that_is_not_there(effect_flights):
+    """Clean flights with the quadratic terms forced into the model anyway (27 more free
+    derivatives): the simulated gap on the test flights barely moves (no over-fitting on the
+    training flights)."""
+    train, test = (fwid.load_flights(p) for p in effect_flights(
+        "none", seed=6, n_train=4, n_test=4))
+    gap = simulation_gap(train, test, "lon", [("nonlinear-aero", None)])
+    assert gap.augmented is not None and len(gap.augmented.model.free) == 16 + 27
+    assert abs(gap.summary["shrink_pct"]) < 5.0, gap.summary
+
+
+@pytest.mark.parametrize("axis", ["lon", "lat"])
+def test_augmented_eom_adds_the_extra_loads_as_the_aerodynamic_ones(axis):
+    """The augmented state equation equals the base one plus the extra loads mapped through
+    the same EOM: checked against the base model with the extra load folded into a derivative
+    (an independent route: a state derivative times the state)."""
+    model, _, left = augment(axis, [("nonlinear-aero", None), ("lon-lat-coupling", None),
+                                    ("flap-coupling", None)])
+    assert left == ["flap-coupling"]
+    base = fwid.longitudinal() if axis == "lon" else fwid.lateral()
+    c = {"mass": 0.02, "Iy": 1e-4, "Ix": 2e-4, "Iz": 1.5e-4, "Ixz": 1e-5, "g": 9.81,
+         "u0": 0.5, "w0": 0.1, "theta0": 0.3}
+    c = {k: jnp.asarray(c[k]) for k in model.constants}
+    x = jnp.array([0.1, 0.2, -0.3, 0.05])
+    u = jnp.array([0.02] + [0.0] * (len(model.inputs) - 1))
+    s0 = {"lon": "q", "lat": "p"}[axis]  # the first state: its square adds s0 * s0
+    load = {"lon": "M", "lat": "L"}[axis]
+    p = {k: jnp.asarray(v) for k, v in model.params.items()}
+    p[f"{load}_{s0}{s0}"] = jnp.asarray(0.7)
+    pb = {k: jnp.asarray(v) for k, v in base.params.items()}
+    pb[f"{load}{s0}"] = pb[f"{load}{s0}"] + 0.7 * x[0]  # the same load, as a derivative
+    np.testing.assert_allclose(model.f(x, u, p, c), base.f(x, u[:1], pb, c), rtol=1e-12)
+    np.testing.assert_allclose(model.forces(x, u, p, c), base.forces(x, u[:1], pb, c),
+                               rtol=1e-12)
+
+
+def test_new_catalogue_entries_in_the_eom_read_their_prepared_columns(effect_flights):
+    """`unsteady-aero`, `flap-frequency` and `time-offset` (issue 16) enter the EOM as extra
+    inputs that `prepare` computes from the flight: the lagging part of each state (a first-
+    order lag computed independently here), the frequency's deviation from its median and
+    its square, and the control shifted earlier by the lead."""
+    from scipy.signal import lfilter, lfilter_zi
+
+    model, prepare, left = augment("lon", [("time-offset", 0.03), ("unsteady-aero", 0.05),
+                                           ("flap-frequency", 0.0)])
+    assert left == []
+    assert model.inputs == ("de_eff", "u_lag", "w_lag", "q_lag", "f_dev", "f_dev2")
+    assert {"Mw_lag", "Zq_lag", "Xf_dev", "Mf_dev2"} <= set(model.free)
+    fl = prepare(fwid.load_flights(effect_flights("none", seed=0)[0])[0])
+    w = np.asarray(fl["w"])
+    a = np.exp(-fl.dt / 0.05)
+    b = (0.5 * (1 - a), 0.5 * (1 - a))
+    ref, _ = lfilter(b, (1, -a), w, zi=lfilter_zi(b, (1, -a)) * w[0])
+    np.testing.assert_allclose(np.asarray(fl["w_lag"]), ref - w, atol=1e-12)
+    f = np.asarray(fl["f"])
+    np.testing.assert_allclose(np.asarray(fl["f_dev2"]), (f - np.median(f)) ** 2, atol=1e-12)
+    de = np.asarray(fl["de"]) - float(fl.trim_value("de"))
+    k = round(0.03 / fl.dt)
+    np.testing.assert_allclose(np.asarray(fl["de_eff"])[:-k], de[k:], atol=1e-9)
+
+
+def test_the_drift_probe_in_the_eom_reads_the_elapsed_time(effect_flights):
+    """`drift` (a trend common to all flights) enters as the time since the start per 10 s and
+    its square, with a coefficient per load, as the probe fitted it."""
+    model, prepare, left = augment("lon", [("drift", None)])
+    assert left == [] and model.inputs == ("de", "time", "time2")
+    assert {"Xtime", "Ztime2", "Mtime"} <= set(model.free)
+    fl = prepare(fwid.load_flights(effect_flights("none", seed=0)[0])[0])
+    t = np.asarray(fl.t)
+    np.testing.assert_allclose(np.asarray(fl["time2"]), ((t - t[0]) / 10) ** 2, atol=1e-15)
+
+
+def test_an_augmented_model_that_diverges_is_recorded_not_raised(effect_flights, monkeypatch):
+    """A model with the effect in the EOM that blows up on a test flight (an outside user's
+    yaw damping r|r| did): the diagnosis still comes back, the simulation block says why the
+    simulated gap is not measured, and the summary says it."""
+    from fwid import FitDivergedError
+    from fwid.diagnosis import _simulation
+    from fwid.report import diagnosis_summary, plot_gap_sim
+
+    train, test = (fwid.load_flights(p) for p in effect_flights(
+        "actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4))
+    real = _simulation.identify
+
+    def identify(flights, model, **kw):
+        if model.name != "lon":  # the augmented model
+            raise FitDivergedError("lon_0.csv: the model's simulation of the flight is not "
+                                   "finite")
+        return real(flights, model, **kw)
+
+    monkeypatch.setattr(_simulation, "identify", identify)
+    d = fwid.diagnose(train, test, process_noise=False)
+    sim = d.simulation
+    assert d.verdict == "actuator-dynamics"
+    assert sim["shrink_pct"] is None and sim["test_rms_after"] is None
+    assert "not finite" in sim["message"] and not sim["converged_augmented"]
+    assert sim["converged_baseline"] in (True, False) and d.models.augmented is None
+    assert "in simulation: the model with actuator-dynamics in the EOM could not be" in (
+        diagnosis_summary(d))
+    # the written report (the CLI's path) survives it too: an outside stall case crashed here
+    title = plot_gap_sim(d)._suptitle.get_text()
+    assert "augmented model diverged" in title and "shrink" not in title
+
