@@ -110,16 +110,23 @@ def fill_gaps(q: np.ndarray, valid: np.ndarray) -> np.ndarray:
 
 
 def euler_321(R: np.ndarray) -> np.ndarray:
-    """3-2-1 Euler angles `(..., 3)` `[phi, theta, psi]` of body -> Earth matrices; `psi`
-    unwrapped along the first axis (continuous in time)."""
+    """3-2-1 Euler angles `(..., 3)` `[phi, theta, psi]` of body -> Earth matrices. Along a
+    time axis (the first of `(N, 3, 3)`) they stay on a branch continuous in time: `phi` and
+    `psi` unwrapped, and through `theta = +-90 deg` the branch `(phi + pi, pi - theta,
+    psi + pi)` (the same attitude) is taken where it is the continuous one."""
     R = np.asarray(R, dtype=float)
     phi = np.arctan2(R[..., 2, 1], R[..., 2, 2])
     theta = -np.arcsin(np.clip(R[..., 2, 0], -1.0, 1.0))
     psi = np.arctan2(R[..., 1, 0], R[..., 0, 0])
-    if psi.ndim >= 1 and psi.shape[0] > 1:
-        psi = np.unwrap(psi, axis=0)
-        phi = np.unwrap(phi, axis=0)
-    return np.stack([phi, theta, psi], -1)
+    e = np.stack([phi, theta, psi], -1)
+    if R.ndim != 3 or len(R) < 2:
+        return e
+    wrap = lambda x: (x + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
+    # crossing theta = +-90 deg, the principal phi and psi both jump by ~pi: switch branch
+    jump = (np.abs(wrap(np.diff(phi))) > np.pi / 2) & (np.abs(wrap(np.diff(psi))) > np.pi / 2)
+    alt = np.concatenate([[0], np.cumsum(jump)]) % 2 == 1
+    e = np.where(alt[:, None], np.stack([phi + np.pi, np.pi - theta, psi + np.pi], -1), e)
+    return np.unwrap(e, axis=0)
 
 
 def euler_to_matrix(phi, theta, psi) -> np.ndarray:
