@@ -18,7 +18,7 @@ import numpy as np
 from . import _model as mdl
 
 #: Samples used to choose the noise levels (from the middle of a take).
-ML_WINDOW = 2000
+ML_WINDOW = 1000
 #: Largest memory (bytes) of the stored smoother gains of one vmapped call.
 GAIN_BYTES = 2e8
 
@@ -66,7 +66,8 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     - `u` `(M, N, c)`: known input of the first state per step (the attitude's nominal
       increment), or None;
     - `scale`: the measurement variance guessed, for the diffuse prior;
-    - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search.
+    - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search;
+      with `gyro_ratio` None, only the gyro's noise is searched.
 
     **Returns:** a [`Smoothed`][].
     """
@@ -97,13 +98,18 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
         qj, qh = mdl.intensities(dt, fc, fh, w0)
         return mdl.process_noise(dt, qj, qh, bias), np.array([1.0, ratio**2][:m_meas])
 
-    if params is None:
-        grid = list(itertools.product(mdl.CUTOFFS, mdl.COEFF_BANDWIDTHS,
-                                      mdl.GYRO_RATIOS if bias else (1.0,)))
+    if params is None or any(p[2] is None for p in params):
+        if params is None:
+            grid = [list(itertools.product(mdl.CUTOFFS, mdl.COEFF_BANDWIDTHS,
+                                           mdl.GYRO_RATIOS if bias else (1.0,)))] * M
+        else:  # the motion's levels known (from the attitude alone): the gyro's noise only
+            grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
         lo = max(0, (N - ML_WINDOW) // 2)
         win = slice(lo, min(N, lo + ML_WINDOW))
-        Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in grid] for w0 in omega0])
-        Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid])
+        Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
+        Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
+        if any(gm != grid[0] for gm in grid):  # gyro ratios only: the same for every problem
+            assert all([g for *_, g in gm] == [g for *_, g in grid[0]] for gm in grid)
         m0w = m0.copy()
         fw = np.argmax(mask[:, win], axis=1)
         m0w[:, 0, :] = z[:, win][np.arange(M), fw]
@@ -112,7 +118,7 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
                                     jnp.asarray(MK[:, win]), jnp.asarray(U[:, win]),
                                     jnp.asarray(m0w), jnp.asarray(P0)))
         best = np.argmax(np.where(np.isfinite(ll), ll, -np.inf), axis=1)
-        params = [grid[b] for b in best]
+        params = [gm[b] for gm, b in zip(grid, best)]
     Q = np.stack([noise(fc, fh, w0, g)[0] for (fc, fh, g), w0 in zip(params, omega0)])
     R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
     chunk = max(1, int(GAIN_BYTES // (N * n * n * 8 * 3)))
