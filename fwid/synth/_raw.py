@@ -106,6 +106,7 @@ def simulate_raw(
     onboard_rate: float = ONBOARD["rate"],
     clock_offset: float | None = None,
     amplitude: float | None = None,
+    onboard: bool = True,
     vehicle: DelFly = DELFLY,
     **flight_kw,
 ) -> dict:
@@ -120,6 +121,7 @@ def simulate_raw(
     - `onboard_rate` [Hz]: the autopilot log's rate.
     - `clock_offset` [s]: `t_tracking - t_onboard`; `None` draws it uniform in +-200 s.
     - `amplitude` [rad]: manoeuvre amplitude (default `RAW_AMPLITUDE[axis]`).
+    - `onboard`: also record the autopilot's log (`False`: `onboard` is `None`).
     - `vehicle`, `flight_kw`: passed to `simulate_flight` (`input`, `start`, `effect`,
       `strength`, `form`, `drift`, ...).
 
@@ -154,7 +156,7 @@ def simulate_raw(
     model = sixdof_model(meta["flap"], t_sim, meta["u_meas"], e_in, vehicle)
 
     # the autopilot's samples: its clock runs from `lead - offset`, in tracking time `s`
-    n_ob = int(np.floor((sim_duration - lead) * onboard_rate)) + 1
+    n_ob = int(np.floor((sim_duration - lead) * onboard_rate)) + 1 if onboard else 0
     t_ob = (lead - offset) + np.arange(n_ob) / onboard_rate
     s_ob = np.minimum(t_ob + offset, sim_duration)
     t_take = t_sim[:n_take]
@@ -190,17 +192,18 @@ def simulate_raw(
         take[c] = truth[c] + NOISE[c] * rng.standard_normal(n_take)
 
     # --- the autopilot's log on its own clock
-    trim = meta["trim"]
-    flap = meta["flap"]
-    rip = _ripple(flap.phase(s_ob), amp)
-    onboard = {"t": t_ob}
-    for j, c in enumerate(("de", "dr")):
-        d = trim[c + "0"] + np.interp(s_ob, t_sim, meta["u_cmd"][:, j]) + rip[c]
-        d = _measured(flight_kw, vehicle, s_ob, d)
-        onboard[c] = d + NOISE[c] * rng.standard_normal(n_ob)
-    onboard["f"] = flap.f(s_ob) + NOISE["f"] * rng.standard_normal(n_ob)
-    for i, c in enumerate(("p", "q", "r")):
-        onboard[c] = ob_sol[c] + bias[i] + ONBOARD["noise"] * rng.standard_normal(n_ob)
+    log = None
+    if onboard:
+        trim, flap = meta["trim"], meta["flap"]
+        rip = _ripple(flap.phase(s_ob), amp)
+        log = {"t": t_ob}
+        for j, c in enumerate(("de", "dr")):
+            d = trim[c + "0"] + np.interp(s_ob, t_sim, meta["u_cmd"][:, j]) + rip[c]
+            d = _measured(flight_kw, vehicle, s_ob, d)
+            log[c] = d + NOISE[c] * rng.standard_normal(n_ob)
+        log["f"] = flap.f(s_ob) + NOISE["f"] * rng.standard_normal(n_ob)
+        for i, c in enumerate(("p", "q", "r")):
+            log[c] = ob_sol[c] + bias[i] + ONBOARD["noise"] * rng.standard_normal(n_ob)
 
     info = {
         "clock_offset_s": offset,
@@ -217,8 +220,8 @@ def simulate_raw(
         "model": "6-DOF nonlinear rigid body (fwid.synth._sixdof)",
     }
     truth_meta = dict(meta["truth"], raw=info)
-    side = {"trim": trim, "first_input": meta["first_input"], "truth": truth_meta}
-    return {"truth": truth, "take": take, "onboard": onboard, "lost": lost, "meta": side}
+    side = {"trim": meta["trim"], "first_input": meta["first_input"], "truth": truth_meta}
+    return {"truth": truth, "take": take, "onboard": log, "lost": lost, "meta": side}
 
 
 def _measured(flight_kw, vehicle, t, column):

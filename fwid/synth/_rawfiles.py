@@ -64,9 +64,10 @@ def write_fwid_raw(path, raw: dict, flips: float = 0.05, seed: int = 0) -> Path:
     take = raw["take"]
     n = take["t"].size
     rng = np.random.default_rng(seed)
-    runs = np.cumsum(rng.random(n) < flips / 4) % 2  # runs of the other sign
-    single = rng.random(n) < flips / 2
-    sign = np.where((runs == 1) ^ single, -1.0, 1.0)
+    flip = rng.random(n) < flips / 2  # single frames
+    for start in rng.integers(0, n, max(1, round(flips / 2 * n / 27))):  # runs of 5-50 frames
+        flip[start : start + rng.integers(5, 51)] = True
+    sign = np.where(flip, -1.0, 1.0)
     quat = take["quat"] * sign[:, None]
     cols = [take["t"], *take["position"].T, *quat.T, take["de"], take["dr"], take["f"]]
     text = ",".join(RAW_COLUMNS) + "\n" + _table(cols, "%.10g")
@@ -182,7 +183,7 @@ def write_raw_flights(out_dir, raw: str = "fwid", n_flights: int = 4, axis: str 
                 "start": rng.uniform(0.8, 1.3)}
         sim_seed = int(rng.integers(2**31 - 1))
         args.update(kw)
-        rec = simulate_raw(axis=axis, seed=sim_seed, **args)
+        rec = simulate_raw(axis=axis, seed=sim_seed, onboard=raw == "motive", **args)
         name = f"{stem}_{i}"
         if raw == "fwid":
             paths.append(write_fwid_raw(out / f"{name}.csv", rec, seed=sim_seed))

@@ -196,6 +196,24 @@ def _solve(model, y0, ts, step, n_steps):
     return ys, jax.vmap(model.loads)(ts, ys), jax.vmap(model.frequency)(ts), jax.vmap(model.phase)(ts)
 
 
+def _bucket(n: int, size: int) -> int:
+    return -(-n // size) * size
+
+
+def _padded(model: SixDof) -> SixDof:
+    """`model` with its input samples extended (same step, last values held) to a multiple
+    of 1024 samples."""
+    t = np.asarray(model.t_in)
+    extra = _bucket(t.size, 1024) - t.size
+    if extra == 0:
+        return model
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    t_new = np.concatenate([t, t[-1] + dt * np.arange(1, extra + 1)])
+    hold = lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], extra, axis=0)])  # noqa: E731
+    return eqx.tree_at(lambda m: (m.t_in, m.u_in, m.e_in), model,
+                       (jnp.asarray(t_new), hold(model.u_in), hold(model.e_in)))
+
+
 def integrate(model: SixDof, y0, ts, step: float = 1 / 2000) -> dict[str, np.ndarray]:
     """Integrate `model` from `y0` at t = 0 with a constant step `step` [s] (Tsit5) and read it
     out at the times `ts` (non-decreasing, >= 0; dense output between steps).
@@ -212,8 +230,13 @@ def integrate(model: SixDof, y0, ts, step: float = 1 / 2000) -> dict[str, np.nda
     `f` (flapping frequency) and `phase` (flapping phase).
     """
     ts = np.asarray(ts, dtype=float)
-    n_steps = int(np.ceil(ts[-1] / step)) + 16
-    ys, loads, f, phase = _solve(model, jnp.asarray(y0, dtype=float), jnp.asarray(ts), float(step), n_steps)
+    n = ts.size
+    # shapes rounded up to buckets, so that takes of similar length share one compilation
+    n_steps = _bucket(int(np.ceil(ts[-1] / step)) + 16, 8192)
+    ts_pad = np.concatenate([ts, np.full(_bucket(n, 4096) - n, ts[-1])])
+    ys, loads, f, phase = _solve(_padded(model), jnp.asarray(y0, dtype=float), jnp.asarray(ts_pad),
+                                 float(step), n_steps)
+    ys, loads, f, phase = ys[:n], loads[:n], f[:n], phase[:n]
     ys = np.array(ys)
     ys[:, 6:10] /= np.linalg.norm(ys[:, 6:10], axis=1, keepdims=True)
     out = {"t": ts}
