@@ -137,3 +137,25 @@ def test_fwid_raw_noise_dropouts_and_sign_flips(noisy_fwid):
     np.testing.assert_allclose(np.rad2deg(rel.std(axis=0)), 0.15, rtol=0.1)
     # the controls and the flapping frequency, measured on the take's time base
     assert np.std(d["de"] - truth["de"]) == pytest.approx(0.002, rel=0.15)
+
+
+def test_truth_loads_obey_the_rigid_body_equations(clean_motive):
+    """`X Y Z = m (V' + w x V) - m R^T g` and `L M N = I w' + w x I w` on the truth's own
+    states (8th-order differences, scipy's rotation): the loads and the motion belong together,
+    with the product of inertia."""
+    from fwid.synth import DELFLY, derivative
+
+    truth, _, _ = _truth(clean_motive)
+    dt = truth["t"][1] - truth["t"][0]
+    V = np.column_stack([truth[c] for c in "uvw"])
+    om = np.column_stack([truth[c] for c in "pqr"])
+    R = Rotation.from_quat(np.column_stack([truth[c] for c in ("qx", "qy", "qz", "qw")])).as_matrix()
+    m, g = DELFLY.mass, DELFLY.g
+    I = np.array([[DELFLY.Ix, 0, -DELFLY.Ixz], [0, DELFLY.Iy, 0], [-DELFLY.Ixz, 0, DELFLY.Iz]])
+    F = m * (derivative(V, dt) + np.cross(om, V)) - m * g * R[:, 2, :]
+    Mo = derivative(om, dt) @ I.T + np.cross(om, om @ I.T)
+    inner = slice(10, -10)
+    for i, c in enumerate("XYZLMN"):
+        got = (F if i < 3 else Mo)[inner, i % 3]
+        ref = truth[c][inner]
+        assert np.sqrt(np.mean((got - ref) ** 2)) < 0.01 * np.sqrt(np.mean(ref**2)), c
