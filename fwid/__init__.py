@@ -43,6 +43,9 @@ EXPORTS = {
         "Flight", "Vehicle", "estimate_trim", "first_input_index", "load_flight", "load_flights",
         "load_vehicle",
     ),
+    "reconstruction": (
+        "read_raw", "reconstruct", "write_reconstruction",
+    ),
     "decomposition": (
         "Decomposition", "check_flapping_frequency", "cycle_averaged", "decompose",
         "estimate_flapping_frequency", "flapping_part", "flapping_phase", "highpass", "lowpass",
@@ -78,7 +81,7 @@ EXPORTS = {
     "report": (
         "harmonic_amplitudes", "plot_steady_vs_manoeuvre", "plot_superposition",
         "plot_time_and_spectrum", "identification_report", "plot_decomposition",
-        "plot_flight_fit", "plot_poles", "write_json",
+        "plot_flight_fit", "plot_poles", "plot_reconstruction", "write_json",
     ),
 }
 _STAGE = {name: stage for stage, names in EXPORTS.items() for name in names}

@@ -107,6 +107,31 @@ def parser() -> argparse.ArgumentParser:
                    "none; flap/combined: their figures (summary, all) or none")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
 
+    rc = sub.add_parser("reconstruct", help="raw tracking takes and autopilot logs to flights: "
+                        "smoothed states and loads (CONTRACTS section 5)", formatter_class=fmt)
+    rc.add_argument("raw", nargs="+", metavar="RAW",
+                    help="raw takes: fwid raw CSVs or Motive CSV exports, or folders of them "
+                    "(their top-level *.csv, not *.onboard.csv)")
+    rc.add_argument("--out", required=True, help="folder for the flights, vehicle.json, "
+                    "reconstruction.json and one figure per take")
+    rc.add_argument("--body", default=None, help="the Motive rigid body's name (needed when the "
+                    "take holds several)")
+    rc.add_argument("--frame", choices=("ned", "y-up", "z-up"), default=None,
+                    help="the recording's world frame, body axes alike (default: ned for the "
+                    "fwid raw CSV, y-up for Motive)")
+    rc.add_argument("--onboard", default=None, metavar="LOG.csv",
+                    help="the autopilot log of a single Motive take (default: NAME.onboard.csv "
+                    "beside it)")
+    rc.add_argument("--clock-offset", type=float, default=None, metavar="S",
+                    help="t_tracking = t_onboard + S, instead of finding it from the gyro")
+    rc.add_argument("--max-dropout", type=float, default=0.1, metavar="S",
+                    help="longest tracking gap bridged (s); a longer one is an error")
+    rc.add_argument("--min-overlap", type=float, default=2.0, metavar="S",
+                    help="shortest overlap of take and autopilot log accepted (s)")
+    rc.add_argument("--no-figures", dest="figures", action="store_false",
+                    help="skip the figure per take")
+    rc.add_argument("--quiet", action="store_true", help="no progress lines")
+
     d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "
                                         "how far the held-out error shrinks once it is added",
                        formatter_class=fmt)
