@@ -63,6 +63,22 @@ def parser() -> argparse.ArgumentParser:
                    "lon_0.csv, ...), so that sets written by separate calls never collide")
     s.add_argument("--duration", type=float, default=4.5, help="seconds per flight")
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
+    r = s.add_argument_group("raw recordings (CONTRACTS section 5; the 6-DOF nonlinear flight)")
+    r.add_argument("--raw", nargs="?", const="fwid", choices=("fwid", "motive"), default=None,
+                   help="write raw recordings instead of flights: the fwid raw CSV (NED), or a "
+                        "Motive CSV export (y-up mm, a second rigid body) with the autopilot log "
+                        "NAME.onboard.csv; the truth goes to OUT_DIR/truth/")
+    r.add_argument("--rate", type=float, default=None, help="tracking frame rate [Hz] (200)")
+    r.add_argument("--position-noise", type=float, default=None,
+                   help="tracking position noise, 1 sigma per axis [mm] (0.4)")
+    r.add_argument("--attitude-noise", type=float, default=None,
+                   help="tracking attitude noise, 1 sigma per axis [deg] (0.15)")
+    r.add_argument("--dropouts", type=float, default=None,
+                   help="share of frames where tracking lost the body (0.005)")
+    r.add_argument("--onboard-rate", type=float, default=None,
+                   help="autopilot log rate [Hz] (512; motive form)")
+    r.add_argument("--clock-offset", type=float, default=None,
+                   help="t_tracking - t_onboard [s] (random in +-200 s; motive form)")
 
     tp = sub.add_parser("template", help="write an example flight folder to overwrite with "
                         "your own data (columns, units, vehicle.json explained in README.txt)",
