@@ -177,9 +177,12 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
             clock = find_offset(take.t, att0[i].w, log.t, gyro, float(np.median(log.columns["f"])),
                                 given=clock_offset, min_overlap=min_overlap)
             if clock is None:
+                at = ("any clock offset" if clock_offset is None
+                      else f"the clock offset {clock_offset:g} s given")
                 raise FlightDataError(
                     f"{take.path}: take and autopilot log {log.path} overlap by less than "
-                    f"{min_overlap:g} s at any clock offset; give the log of this take")
+                    f"{min_overlap:g} s at {at}; give the log of this take"
+                    + ("" if clock_offset is None else " or the right --clock-offset"))
             s, cols = _cut(take, clock, min_overlap)
             stage.append((i, s, cols, clock, att0[i]))
         except FwidError as e:
