@@ -47,7 +47,7 @@ def eigenvalue_sensitivity(
 
     $$\\frac{d\\lambda_i}{dp} = \\frac{w_i^H (dA/dp)\\, v_i}{w_i^H v_i},$$
 
-    with `dA/dp` from `jax.jacfwd` of [`fwid.GreyBoxModel.state_matrices`][] (`w_i^H` are the
+    with `dA/dp` from `jax.jacfwd` of `state_matrices` of [`fwid.GreyBoxModel`][] (`w_i^H` are the
     rows of `V^{-1}`). For an oscillatory pair with `lambda = -zeta wn + i wn sqrt(1 - zeta^2)`:
     `d wn = Re(conj(lambda) d lambda) / wn` and `d zeta = -(d Re lambda) / wn - Re(lambda)
     d wn / wn^2`; for an aperiodic mode `d tau = d lambda / lambda^2` (`tau = -1/lambda`). The

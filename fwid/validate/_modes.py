@@ -16,7 +16,7 @@ def eigenvalues(model: GreyBoxModel, consts: Mapping, params=None, *, x0=None,
     imaginary part then real part.
 
     `A` is taken at `x0`, `u0` (default `x = 0, u = 0`, see
-    [`fwid.GreyBoxModel.state_matrices`][]): the trim for fwid's DelFly models, whose states
+    `state_matrices` of [`fwid.GreyBoxModel`][]): the trim for fwid's DelFly models, whose states
     and inputs are perturbations from it; give the trim point for a model in absolute states.
     """
     A, _ = model.state_matrices(model.params if params is None else params, consts, x0, u0)
