@@ -16,6 +16,7 @@ import numpy as np
 import fwid
 
 from _problem import X64_BY_FWID
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 def _rss_mb():
@@ -163,8 +164,8 @@ def write(res, out, md):
     """`res` as JSON to `out`, the Markdown `md` next to it (`.md`), and print `md`."""
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1, default=_jsonable) + "\n")
-    out.with_suffix(".md").write_text(md)
+    out.write_text(_provenance.json_text(res, indent=1, default=_jsonable))
+    out.with_suffix(".md").write_text(_provenance.markdown(md))
     print()
     print(md)
     print(f"wrote {out} and {out.with_suffix('.md')}")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import platform
 from collections import Counter, defaultdict
 from pathlib import Path
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 #: Verdicts that name no catalogue effect.
@@ -284,6 +285,6 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           *near_ties(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
-    stem.with_suffix(".md").write_text(text)
+    stem.with_suffix(".md").write_text(_provenance.markdown(text))
     figure(results, stem.with_suffix(".png"))
     return text

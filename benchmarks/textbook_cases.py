@@ -51,6 +51,7 @@ import _tc08  # noqa: E402
 import _twin_otter  # noqa: E402
 from _method_cases import RUNNERS  # noqa: E402
 from _textbook import agreement, as_table, fit_fwid, fit_reference, fwid_table  # noqa: E402
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 CASES = {"tc01": lambda: _tc01.CASE, "tc04_oem": lambda: _tc04.CASE,
          "twin_otter_tlonss": _twin_otter.case}
@@ -114,7 +115,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     out = {k: run_case(k, args.reference) for k in args.cases.split(",")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.json).write_text(_provenance.json_text(out, indent=2))
     print(f"\nwrote {args.json}")
 
 
