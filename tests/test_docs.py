@@ -60,3 +60,42 @@ def test_site_builds_strict_offline(tmp_path):
     index = (site / "index.html").read_text()
     assert "fonts.googleapis" not in index and "fonts.gstatic" not in index
     assert not (ROOT / ".cache").exists() or not any((ROOT / ".cache").glob("mkdocs-jupyter*"))
+
+
+#: The stages whose public docstrings are in the anchors' form (diffrax's): a one-line
+#: summary, then `**Arguments:**` and `**Returns:**` (a class: its `**Fields:**` or
+#: `**Arguments:**`).
+ANCHOR_FORM = ("data", "decomposition", "models", "simulation", "validate", "sensitivity",
+               "report", "identification")
+
+
+def _form_problems(name, obj) -> list[str]:
+    import inspect
+
+    doc = inspect.getdoc(obj) or ""
+    problems = []
+    if not doc or "\n" in doc.split("\n\n")[0]:
+        problems.append(f"{name}: the summary is not one line")
+    if inspect.isclass(obj):
+        if not any(k in doc for k in ("**Arguments:**", "**Fields:**", "**Attributes:**")):
+            problems.append(f"{name}: no **Fields:** or **Arguments:**")
+    else:
+        for key in ("**Arguments:**", "**Returns:**"):
+            if key not in doc:
+                problems.append(f"{name}: no {key}")
+    return problems
+
+
+def test_public_docstrings_in_the_anchors_form():
+    problems = [p for stage in ANCHOR_FORM for n in fwid.EXPORTS.get(stage, ())
+                for p in _form_problems(n, getattr(fwid, n))]
+    assert not problems, "\n".join(problems)
+
+
+def test_docstring_form_check_can_fail():
+    def f(x):
+        """Two lines
+        of summary."""
+
+    assert _form_problems("f", f) == ["f: the summary is not one line", "f: no **Arguments:**",
+                                      "f: no **Returns:**"]

@@ -37,8 +37,10 @@ def eigenvalue_sensitivity(
     *,
     names: Sequence[str] | None = None,
 ) -> dict:
-    """Derivatives of the eigenvalues of `A = df/dx` and of the modes' natural frequency and
-    damping with respect to the parameters and the trim/mass constants (Tables 3 and 6).
+    """Derivatives of the eigenvalues and modes with respect to parameters and constants.
+
+    The eigenvalues of `A = df/dx` and the modes' natural frequency and damping (Tables 3
+    and 6), differentiated with respect to the parameters and the trim/mass constants.
 
     For the DelFly's longitudinal model (Eq. 7) `A` depends on the aerodynamic derivatives
     (`Xq ... Mw`, divided by `mass` or `Iy`) and on the trim (`u0`, `w0`, `theta0`, with `g`).
