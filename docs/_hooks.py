@@ -86,7 +86,53 @@ def _expand(nav: list, entry: str, section: list) -> list:
     return out
 
 
+def _nb_title(path: Path) -> str:
+    """A notebook's first Markdown heading, else its file name."""
+    import json
+
+    try:
+        for cell in json.loads(path.read_text()).get("cells", []):
+            if cell.get("cell_type") == "markdown":
+                for line in "".join(cell.get("source", "")).splitlines():
+                    if line.startswith("# "):
+                        return line[2:].strip()
+    except (OSError, ValueError):
+        pass
+    return path.stem
+
+
+def _listed(nav) -> set[str]:
+    out = set()
+    for item in nav:
+        value = next(iter(item.values())) if isinstance(item, dict) else item
+        if isinstance(value, list):
+            out |= _listed(value)
+        else:
+            out.add(value)
+    return out
+
+
+def _append_unlisted(nav: list, section: str, entries: list[dict]) -> list:
+    """Pages of a folder that the navigation does not list yet go at the end of `section`
+    (a guide page or a notebook added without touching `mkdocs.yml` still shows)."""
+    listed = _listed(nav)
+    extra = [e for e in entries if next(iter(e.values())) not in listed]
+    out = []
+    for item in nav:
+        if isinstance(item, dict) and section in item and isinstance(item[section], list):
+            item = {section: [*item[section], *extra]}
+        out.append(item)
+    return out
+
+
 def on_config(config):
+    docs = Path(config["docs_dir"])
+    guide = [{_title(p.read_text(), p.stem): f"guide/{p.name}"}
+             for p in sorted((docs / "guide").glob("*.md"))]
+    notebooks = [{_nb_title(p): f"notebooks/{p.name}"}
+                 for p in sorted((docs / "notebooks").glob("*.ipynb"))]
+    config["nav"] = _append_unlisted(_append_unlisted(config["nav"], "Guide", guide),
+                                     "Notebooks", notebooks)
     api = [{"Overview": "api/index.md"}]
     for name in _api_pages():
         text = (API / name).read_text()
