@@ -99,3 +99,11 @@ def test_docstring_form_check_can_fail():
 
     assert _form_problems("f", f) == ["f: the summary is not one line", "f: no **Arguments:**",
                                       "f: no **Returns:**"]
+
+
+@pytest.mark.skipif(_NO_MKDOCS or importlib.util.find_spec("griffe") is None, reason=_REASON)
+def test_lists_in_docstrings_get_their_blank_line():
+    import _griffe  # docs/_griffe.py
+
+    text = "Summary.\n\n**Arguments:**\n- `x`: one,\n  continued.\n- `y`: two.\n\n```\n- not a list\n```"
+    assert _griffe.blank_line_before_lists(text) == text.replace(":**\n-", ":**\n\n-")
