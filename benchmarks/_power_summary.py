@@ -258,7 +258,7 @@ def figure(results, path: Path) -> None:
     fig.legend(handles, [f"{n}+{n} flights" for n in counts], loc="lower center",
                ncol=len(counts), fontsize=8)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, metadata={"Description": _provenance.header(_provenance.provenance())})
     plt.close(fig)
 
 

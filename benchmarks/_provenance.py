@@ -3,7 +3,8 @@
 Every writer of `benchmarks/results/` goes through this module, so each file starts with them:
 a Markdown file with a `Command: ... | commit ... | date ...` line under its title, a JSON file
 with a top-level `"provenance"` key (a list of records becomes `{"provenance", "results"}`), a
-JSON-lines file with a first line `{"provenance": ...}` (`records` skips it when reading).
+JSON-lines file with a first line `{"provenance": ...}` (`records` skips it when reading), a
+PNG figure with the same line as its `Description` text chunk.
 """
 
 from __future__ import annotations
