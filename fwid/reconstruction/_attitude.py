@@ -68,7 +68,7 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
       its noise is still searched (the motion's levels kept);
     - `passes`: passes of the iterated smoother.
 
-    **Returns:** an [`Attitude`][].
+    **Returns:** an `Attitude`.
     """
     B, N = tracked.shape
     Rm = quat_to_matrix(np.where(tracked[..., None], quat, [1.0, 0, 0, 0]))

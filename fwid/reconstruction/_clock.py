@@ -84,7 +84,7 @@ def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarra
     - `given`: an offset to use instead of searching (its quality is still measured);
     - `min_overlap`: the shortest overlap (s) a lag may leave.
 
-    **Returns:** a [`ClockOffset`][], or None when no lag leaves `min_overlap` in common.
+    **Returns:** a `ClockOffset`, or None when no lag leaves `min_overlap` in common.
     """
     dt = (t[-1] - t[0]) / (len(t) - 1)
     spline = interpolate.CubicSpline(t_log, lowpass(t_log, gyro, 0.45 / dt), axis=0,

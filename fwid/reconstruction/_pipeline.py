@@ -133,8 +133,10 @@ def _cut(take: RawTake, clock, min_overlap):
 def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onboard=None,
                 clock_offset: float | None = None, max_dropout: float = MAX_DROPOUT,
                 min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None) -> Reconstruction:
-    """Raw takes to section-1 flights (CONTRACTS section 5): smoothed states and the loads of
-    the full nonlinear rigid-body equations.
+    """Raw takes to section-1 flights (CONTRACTS section 5), smoothed and with their loads.
+
+    The states come from the smoother, the loads from the full nonlinear rigid-body
+    equations; a take that fails is reported and the others go on.
 
     **Arguments:**
     - `paths`: raw takes (files, or folders of them): fwid raw CSVs or Motive CSV exports;
@@ -145,7 +147,9 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     - `vehicle`: a `vehicle.json` path or its dict (default: the one beside each take);
     - `progress`: called with a one-line message per take.
 
-    **Returns:** a [`fwid.reconstruction.Reconstruction`][]: the flights and the failures.
+    **Returns:** a `fwid.reconstruction.Reconstruction`: `flights` (each a
+    `ReconstructedFlight`: `columns`, `entry` of `reconstruction.json`, ...) and `failures`
+    (`(path, one-line message)`).
     """
     files = raw_files(paths)
     if onboard is not None and len(files) > 1:

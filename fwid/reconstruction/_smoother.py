@@ -87,7 +87,7 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search;
       with `gyro_ratio` None, only the gyro's noise is searched.
 
-    **Returns:** a [`Smoothed`][].
+    **Returns:** a `Smoothed`.
     """
     import jax.numpy as jnp
 
