@@ -122,6 +122,8 @@ def fit_each(
     exps = [with_measured_x0(model, e) for e in experiments]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
+    pb = prior_bounds(model, list(model.free), prior, bounds)
+    pb = pb if has_any(pb) else None  # without either: the plain fits' program
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
         for e, n in zip(exps, names):  # the checks first, flight by flight
             prepare(model, [e], [n], "model", 0)
@@ -129,8 +131,6 @@ def fit_each(
                   for e, n, s in zip(exps, names, least_squares_start_each(model, exps))]
     else:  # one start for all (the checks still run on every flight)
         starts = [prepare(model, exps, names, start, 0)] * len(exps)
-    pb = prior_bounds(model, list(model.free), prior, bounds)
-    pb = pb if has_any(pb) else None  # without either: the plain fits' program
     if pb is not None:
         starts = [(m, pb.clip(th)) for m, th in starts]
     kw = dict(max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol)
