@@ -122,8 +122,10 @@ def fit_each(
     exps = [with_measured_x0(model, e) for e in experiments]
     names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
     t0 = time.perf_counter()
-    pb = prior_bounds(model, list(model.free), prior, bounds)
-    pb = pb if has_any(pb) else None  # without either: the plain fits' program
+    pb = None  # without a prior or bounds: the plain fits' program
+    if prior is not None or bounds is not None:
+        pb = prior_bounds(model, list(model.free), prior, bounds)
+        pb = pb if has_any(pb) else None
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
         for e, n in zip(exps, names):  # the checks first, flight by flight
             prepare(model, [e], [n], "model", 0)

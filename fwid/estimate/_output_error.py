@@ -164,8 +164,10 @@ def fit_output_error(
     t0 = time.perf_counter()
     per_flight = len(exps) > 1 and model.local and local_per_flight is not False
     n_local = len(exps) if per_flight else 0
-    pb = prior_bounds(model, free_layout(model, n_local)[2], prior, bounds)
-    pb = pb if has_any(pb) else None  # without either: the plain fit's program
+    pb = None  # without a prior or bounds: the plain fit's program
+    if prior is not None or bounds is not None:
+        pb = prior_bounds(model, free_layout(model, n_local)[2], prior, bounds)
+        pb = pb if has_any(pb) else None
     start_model, theta0 = prepare(model, exps, names, start, n_local)
     if pb is not None:
         theta0 = pb.clip(theta0)

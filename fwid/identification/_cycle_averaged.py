@@ -129,7 +129,8 @@ def identify(
     flights = list(flights)
     if not flights:
         raise InputError("no flights to identify from")
-    prior_bounds(model, list(model.free), prior, bounds)  # bad names or values: say so now
+    if prior is not None or bounds is not None:  # bad names or values: say so now
+        prior_bounds(model, list(model.free), prior, bounds)
     _say_missing_forces(model, list(flights) + list(validate))
     exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]
     names = [f.name for f in flights]
