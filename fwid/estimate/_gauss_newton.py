@@ -253,9 +253,9 @@ class RelaxedGaussNewton(optx.AbstractGaussNewton):
     The relaxation converges linearly (here by a factor of about 40 per step), so a tight
     `atol` costs a step or two.
 
-    With a `prior` ([`PriorBounds`][], `fwid.estimate._prior`) its residuals
+    With a `prior` (`fwid.estimate.PriorBounds`: a prior and bounds) its residuals
     `(theta - mean) / std` join the cost, the step and the convergence test, and the step is
-    the bounded-variable one ([`bounded_newton`][]), projected into the bounds.
+    the bounded-variable one (`bounded_newton`), projected into the bounds.
     """
 
     rtol: float

@@ -238,7 +238,7 @@ def prior_bounds(model, names: Sequence[str], prior=None, bounds=None) -> PriorB
 def prior_information(prior, names: Sequence[str]) -> np.ndarray:
     """The information matrix a prior adds, `diag(1 / std^2)` over `names` (0 where a name
     has no prior): to add to a Fisher information matrix (`M_total = M_data + this`).
-    `prior`: anything [`prior_from`][] takes."""
+    `prior`: anything [`fwid.prior_from`][] takes."""
     prior = _normalised_prior(prior)
     return np.diag([1.0 / prior[k][1] ** 2 if k in prior else 0.0 for k in names])
 

@@ -61,7 +61,7 @@ class FitResult(eqx.Module):
       not `lag1`, is what the model-error warning and `noise="auto"` read.
     - `residual_corr`: the correlation matrix of the residuals between the outputs (whatever
       R the fit used).
-    - `prior`: the prior and the bounds the fit used ([`PriorBounds`][] over `names`: means,
+    - `prior`: the prior and the bounds the fit used (`fwid.estimate.PriorBounds` over `names`: means,
       `1/std`, lower and upper bounds), `None` for a fit without either. With a prior,
       `cost` and `cost_history` include its part `1/2 sum ((theta - mean) / std)^2` (the
       negative log-posterior) and the information behind `std`, `std_cr` and `cov` its
@@ -70,7 +70,7 @@ class FitResult(eqx.Module):
       bound (the data pull it beyond), else 0 (`None` without bounds). Such a parameter's
       `std`, `std_cr` and its row and column of `cov` and `corr` are NaN (its spread is
       one-sided, not Gaussian), and those of the others are conditional on it held at the
-      bound; see [`active_bounds`][].
+      bound; see `active_bounds`.
     """
 
     model: GreyBoxModel
