@@ -119,6 +119,14 @@ def check_limits(duration, amplitude, quiet, rate, switch_rate=None) -> None:
         raise InputError(f"design: switch rate must be > 0 Hz, got {switch_rate}")
 
 
+def criterion(setting: Setting, t, u, base=None):
+    """The D-optimal criterion of the control `u` at the times `t`: `log det` of the vehicle's
+    information (relative units) plus `base` (flights flown, prior), and the outputs."""
+    M, ys = information(setting, setting.experiment(t, u))
+    Mv = vehicle_information(setting, M)
+    return log_det(Mv if base is None else Mv + base), ys
+
+
 def flown_information(setting: Setting, flown: Sequence, grid_rate: float) -> np.ndarray:
     """The vehicle's information (relative units) of the flights already flown: each an
     `Experiment` (its time, control column and constants), or `(t, u)` of the control."""
@@ -245,8 +253,7 @@ def design_input(
             return 1.5 * jax.random.normal(key, (k,))
 
     def crit_of(u):
-        M, ys = information(setting, setting.experiment(grid.t, u))
-        return log_det(vehicle_information(setting, M) + base), ys
+        return criterion(setting, grid.t, u, base)
 
     def bounded(u):
         """`u` scaled down so that the predicted attitude peak is within the bound (exact
