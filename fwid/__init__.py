@@ -71,7 +71,7 @@ EXPORTS = {
         "metric_sensitivity", "output_sensitivity", "rank_sensitivities",
     ),
     "design": (
-        "Design", "design_input",
+        "Design", "Discrimination", "design_discriminating", "design_input",
     ),
     "identification": (
         "CombinedIdentification", "FlappingIdentification", "FlightFit", "Identification",

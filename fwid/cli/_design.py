@@ -12,6 +12,10 @@ def design(args) -> int:
     t0 = time.perf_counter()
     from fwid._errors import InputError
 
+    if args.discriminate is not None:
+        from ._discriminate import discriminate
+
+        return discriminate(args)
     if args.model is None or args.source is None:
         raise InputError("design: give --model lon|lat and --from REPORT.json (the report of "
                          "`fwid identify --out DIR`)")

@@ -134,4 +134,11 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--seed", type=int, default=0, help="random seed of the restarts")
     g.add_argument("--no-progress", dest="quiet_progress", action="store_true",
                    help="no progress lines")
+    g.add_argument("--discriminate", default=None, metavar="DIAGNOSIS_DIR",
+                   help="instead: the input telling apart the two closest effects of the "
+                        "diagnosis in DIAGNOSIS_DIR (diagnosis.json), both models re-fitted on "
+                        "its training flights")
+    g.add_argument("--train", nargs="+", default=None, metavar="DATA",
+                   help="with --discriminate: the diagnosis's training flights (default: the "
+                        "paths its diagnosis.json records)")
     return p

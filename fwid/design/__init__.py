@@ -15,6 +15,10 @@
 """
 
 from ._design import Design as Design, design_input as design_input
+from ._discriminate import (
+    Discrimination as Discrimination,
+    design_discriminating as design_discriminating,
+)
 
 
 from ._signals import CLASSIC as CLASSIC, Grid as Grid

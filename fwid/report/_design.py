@@ -77,3 +77,51 @@ def write_design(design, out: Path) -> list[str]:
     os.chmod(tmp, _default_mode())
     os.replace(tmp, out / "design.png")
     return ["input.csv", "design.json", "design.png"]
+
+
+def plot_discrimination(d, control: str, names: tuple[str, str]):
+    """The discriminating input and the two models' predicted outputs (normalised)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(d.outputs)
+    fig, ax = plt.subplots(1, n + 1, figsize=(4 * (n + 1), 3.6))
+    ax[0].plot(d.t, np.degrees(d.u), label="designed")
+    ax[0].plot(d.t, np.degrees(d.u_3211), "--", label="3211")
+    ax[0].set(xlabel="t [s]", ylabel=f"{control} [deg]", title="input")
+    ax[0].legend()
+    for i, name in enumerate(d.outputs):
+        ax[i + 1].plot(d.t, d.response_a[:, i], label=names[0])
+        ax[i + 1].plot(d.t, d.response_b[:, i], "--", label=names[1])
+        ax[i + 1].set(xlabel="t [s]", title=f"predicted {name}")
+    ax[1].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _save_png(fig, path: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    with os.fdopen(fd, "wb") as fh:
+        fh.write(buf.getvalue())
+    os.chmod(tmp, _default_mode())
+    os.replace(tmp, path)
+
+
+def write_discrimination(d, control: str, info: dict, out: Path) -> list[str]:
+    """`input.csv`, `design.json` (the pair, the criterion, the limits, what was held at
+    zero) and `design.png` of `fwid design --discriminate`."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = ["t," + control] + [f"{t:.6f},{u:.10g}" for t, u in zip(d.t, d.u)]
+    write_text(out / "input.csv", "\n".join(rows) + "\n")
+    write_json(out / "design.json", {"discriminate": info, "control": control, **d.to_json()})
+    names = tuple(p["effect"] for p in info["pair"])
+    _save_png(plot_discrimination(d, control, names), out / "design.png")
+    return ["input.csv", "design.json", "design.png"]
