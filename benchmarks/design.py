@@ -12,7 +12,13 @@ identified with `fwid.identify`. Reported per input: the predicted Cramer-Rao st
 12 derivatives (the identified model's information for that input), the fit's std, and the
 actual error over seeds; geometric means over the derivatives of ratios to the design.
 
-    python benchmarks/design.py [--quick]
+    python benchmarks/design.py [--quick] [--part inputs|discrimination|all]
+
+Discrimination: for three (true effect, rival) pairs, flights with the true effect are
+diagnosed, the input telling the two closest effects apart is designed from the diagnosis
+(both augmented models re-fitted, `fwid design --discriminate`'s code), flown with the true
+effect and added to the training flights; the verdicts before and after are counted, against
+adding a second 3211 instead.
 """
 
 from __future__ import annotations
@@ -170,6 +176,80 @@ def run_simulator(sim: str, seeds, out: Path, log) -> dict:
     return res
 
 
+# -- discrimination ---------------------------------------------------------------------------
+#: (true effect, the rival it is confused with): pairs the diagnosis tends to leave close.
+PAIRS = [("actuator-dynamics", "unsteady-aero"), ("actuator-dynamics", "time-offset"),
+         ("nonlinear-aero", "unsteady-aero")]
+DISC_STRENGTH = 1.5
+
+
+def _synth_flight(effect, t_u, u, seed, out: Path, name: str):
+    original = synth_sim.make_input
+    if u is not None:
+        synth_sim.make_input = lambda nm, t, start, unit, amp: hold(t_u, u, t)
+    try:
+        fl = synth_sim.simulate_flight(axis="lon", seed=seed, duration=DURATION, start=QUIET,
+                                       effect=effect, strength=DISC_STRENGTH)
+    finally:
+        synth_sim.make_input = original
+    fwid.synth.write_csv(out / f"{name}.csv", fl)
+    fwid.synth.write_sidecar(out / f"{name}.json", fl)
+    fwid.synth.write_vehicle(out)
+    return fwid.load_flight(out / f"{name}.csv")
+
+
+def _verdict(train, test):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = fwid.diagnose(train, test, axis="lon", simulation=False, process_noise=False)
+    return d
+
+
+def run_discrimination(seeds, out: Path, log) -> dict:
+    """For each pair and seed: diagnose two training and two test flights (3211s) with the
+    true effect; design the input telling the two closest effects apart; fly it (and, as the
+    control, a second 3211) with the true effect, add it to the training flights and diagnose
+    again. Counted: right single verdicts before and after."""
+    from fwid.cli._discriminate import close_pair, discriminating_models
+
+    rows = []
+    grid = Grid(DURATION, QUIET, 100.0)
+    for true, rival in PAIRS:
+        for seed in seeds:
+            base = 100 * seed
+            train = [_synth_flight(true, None, None, base + i, out, f"{true}_{seed}_tr{i}")
+                     for i in range(2)]
+            test = [_synth_flight(true, None, None, base + 10 + i, out, f"{true}_{seed}_te{i}")
+                    for i in range(2)]
+            d0 = _verdict(train, test)
+            pair = close_pair(d0.to_json())
+            models, maps, held, consts, R = discriminating_models("lon", pair, train)
+            disc = fwid.design_discriminating(
+                models[0], models[1], consts=consts, R=R, amplitude=AMPLITUDE,
+                duration=DURATION, quiet=QUIET, inputs_a=maps[0], inputs_b=maps[1],
+                attitude="theta")
+            new = _synth_flight(true, disc.t, disc.u, base + 20, out, f"{true}_{seed}_des")
+            ctl = _synth_flight(true, None, None, base + 20, out, f"{true}_{seed}_ctl")
+            d1 = _verdict(train + [new], test)
+            d2 = _verdict(train + [ctl], test)
+            row = {"true": true, "intended_rival": rival, "seed": seed,
+                   "pair_told_apart": [p[0] for p in pair], "held": held,
+                   "verdict_before": d0.verdict, "verdict_designed": d1.verdict,
+                   "verdict_3211": d2.verdict, "distance_ratio_vs_3211":
+                   disc.distance / max(disc.distance_3211, 1e-300),
+                   "near_tie_before": bool(any(e.get("near_tie") for e in d0.effects))}
+            rows.append(row)
+            log(f"discrimination {true} seed {seed}: pair {row['pair_told_apart']}, before "
+                f"{d0.verdict}, designed {d1.verdict}, 3211 {d2.verdict}")
+    n = len(rows)
+    return {"rows": rows, "strength": DISC_STRENGTH,
+            "right_before": sum(r["verdict_before"] == r["true"] for r in rows),
+            "right_designed": sum(r["verdict_designed"] == r["true"] for r in rows),
+            "right_3211": sum(r["verdict_3211"] == r["true"] for r in rows), "runs": n}
+
+
 def markdown(header: list[str], results: dict) -> str:
     lines = header + ["", "Geometric means over the 12 derivatives of the ratio input / designed "
                       "(above 1: the designed input is better), and of the spread over seeds "
@@ -188,10 +268,25 @@ def markdown(header: list[str], results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def markdown_discrimination(disc: dict) -> str:
+    lines = ["## discrimination", "",
+             f"effect strength {disc['strength']}; right single verdicts of {disc['runs']} runs: "
+             f"before {disc['right_before']}, after adding the designed flight "
+             f"{disc['right_designed']}, after adding a second 3211 {disc['right_3211']}", "",
+             "| true | seed | pair told apart | before | + designed | + 3211 | D ratio vs 3211 |",
+             "|---|---|---|---|---|---|---|"]
+    for r in disc["rows"]:
+        lines.append(f"| {r['true']} | {r['seed']} | {' / '.join(r['pair_told_apart'])} | "
+                     f"{r['verdict_before']} | {r['verdict_designed']} | {r['verdict_3211']} | "
+                     f"{r['distance_ratio_vs_3211']:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="3 seeds (default 8)")
     ap.add_argument("--simulators", nargs="+", default=list(SIMULATORS))
+    ap.add_argument("--part", choices=("inputs", "discrimination", "all"), default="all")
     args = ap.parse_args(argv)
     seeds = list(range(3 if args.quick else 8))
     command = "python benchmarks/design.py" + (" --quick" if args.quick else "")
@@ -202,24 +297,32 @@ def main(argv=None) -> int:
     def log(msg):
         print(f"design benchmark: {msg}", flush=True)
 
-    results = {}
+    results, disc = {}, None
     with tempfile.TemporaryDirectory() as tmp:
-        for sim in args.simulators:
-            out = Path(tmp) / sim
+        if args.part in ("inputs", "all"):
+            for sim in args.simulators:
+                out = Path(tmp) / sim
+                out.mkdir()
+                results[sim] = run_simulator(sim, seeds, out, log)
+        if args.part in ("discrimination", "all"):
+            out = Path(tmp) / "discrimination"
             out.mkdir()
-            results[sim] = run_simulator(sim, seeds, out, log)
+            disc = run_discrimination(seeds[:1] if args.quick else seeds[:3], out, log)
+    name = "design" if args.part == "all" else f"design_{args.part}"
     RESULTS.mkdir(exist_ok=True)
     header = [f"command: {command}", f"commit: {commit}", f"date: {date}"]
     doc = {"command": command, "commit": commit, "date": date, "seeds": seeds,
            "amplitude_rad": AMPLITUDE, "duration_s": DURATION, "quiet_s": QUIET,
            "derivatives": DERIVS, "results": results,
-           "discrimination": "not run: the discriminating design is not built yet"}
+           "discrimination": disc}
     from fwid.report._json import write_json, write_text
 
-    write_json(RESULTS / "design.json", doc)
-    write_text(RESULTS / "design.md", markdown(["# Designed vs classic inputs", ""] +
-                                              [h + "  " for h in header], results))
-    print(markdown(header, results))
+    text = markdown(["# Designed vs classic inputs", ""] + [h + "  " for h in header], results)
+    if disc is not None:
+        text += "\n" + markdown_discrimination(disc)
+    write_json(RESULTS / f"{name}.json", doc)
+    write_text(RESULTS / f"{name}.md", text)
+    print(text)
     return 0
 
 

@@ -84,42 +84,17 @@ def control_map(model, axis: str, variant_of_control):
     return inputs
 
 
-def discriminate(args) -> int:
-    from fwid.design._design import check_limits
-
-    check_limits(args.duration, args.amplitude, args.quiet, args.rate, args.switch_rate)
-    path = Path(args.discriminate) / "diagnosis.json"
-    if not path.is_file():
-        raise InputError(f"{path}: no such file; give the folder `fwid diagnose --out DIR` "
-                         "wrote")
-    try:
-        diag = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{path}: not JSON ({exc})") from None
-    axis = diag.get("axis")
-    if args.model is not None and args.model != axis:
-        raise InputError(f"{path}: the diagnosis is of the {axis!r} axis, not {args.model!r}")
-    pair = close_pair(diag)
-    train = args.train or diag.get("method", {}).get("train_paths")
-    if not train:
-        raise InputError(f"{path}: the diagnosis names its training flights "
-                         f"({', '.join(diag.get('train', []))}) but not where they are; give "
-                         "them with --train DATA...")
-    from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets
-
-    check_paths(train)
-    (records,) = read_sets(train, require=DIAGNOSE_COLUMNS[axis][:5], vehicle_for=axis)
+def discriminating_models(axis: str, pair, flights, say=None):
+    """The two augmented models of `pair` (`(effect, variant)`), each fitted jointly on
+    `flights` from the baseline's joint fit; their control maps; what is held at zero; the
+    constants and the baseline's R."""
     import warnings
 
     import numpy as np
 
-    import fwid
     from fwid.diagnosis._augment import augment
     from fwid.identification import identify
-    from fwid.report._design import write_discrimination
 
-    flights = fwid.data.build_flights(records)
-    say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
     if say:
         say(f"re-fitting the models with {pair[0][0]} and with {pair[1][0]} on "
             f"{len(flights)} training flights")
@@ -147,10 +122,48 @@ def discriminate(args) -> int:
             if extra:
                 held.append(f"{name}: inputs {', '.join(extra)} held at zero (not driven by "
                             "the control)")
+    base_model = base.model.with_params({k: 0.0 for k in base.model.local})
+    models = [base_model if m is base.model else m for m in models]
     consts = {k: float(np.asarray(v)) for k, v in base.consts.items()
               if k in base.model.constants}
+    return models, maps, held, consts, np.asarray(base.fit.R)
+
+
+def discriminate(args) -> int:
+    from fwid.design._design import check_limits
+
+    check_limits(args.duration, args.amplitude, args.quiet, args.rate, args.switch_rate)
+    path = Path(args.discriminate) / "diagnosis.json"
+    if not path.is_file():
+        raise InputError(f"{path}: no such file; give the folder `fwid diagnose --out DIR` "
+                         "wrote")
+    try:
+        diag = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: not JSON ({exc})") from None
+    axis = diag.get("axis")
+    if args.model is not None and args.model != axis:
+        raise InputError(f"{path}: the diagnosis is of the {axis!r} axis, not {args.model!r}")
+    pair = close_pair(diag)
+    train = args.train or diag.get("method", {}).get("train_paths")
+    if not train:
+        raise InputError(f"{path}: the diagnosis names its training flights "
+                         f"({', '.join(diag.get('train', []))}) but not where they are; give "
+                         "them with --train DATA...")
+    from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets
+
+    check_paths(train)
+    (records,) = read_sets(train, require=DIAGNOSE_COLUMNS[axis][:5], vehicle_for=axis)
+    import numpy as np
+
+    import fwid
+    from fwid.report._design import write_discrimination
+
+    flights = fwid.data.build_flights(records)
+    say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
+    models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
     d = fwid.design_discriminating(
-        models[0], models[1], consts=consts, R=np.asarray(base.fit.R), amplitude=args.amplitude,
+        models[0], models[1], consts=consts, R=R, amplitude=args.amplitude,
         duration=args.duration, quiet=args.quiet, inputs_a=maps[0], inputs_b=maps[1],
         parametrisation=args.parametrisation, switch_rate=args.switch_rate, rate=args.rate,
         attitude={"lon": "theta", "lat": "phi"}[axis],

@@ -65,17 +65,7 @@ def write_design(design, out: Path) -> list[str]:
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "input.csv", input_csv(design))
     write_json(out / "design.json", design.to_json())
-    fig = plot_design(design)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    fd, tmp = tempfile.mkstemp(dir=out, prefix=".design.png.", suffix=".tmp")
-    with os.fdopen(fd, "wb") as fh:
-        fh.write(buf.getvalue())
-    os.chmod(tmp, _default_mode())
-    os.replace(tmp, out / "design.png")
+    _save_png(plot_design(design), out / "design.png")
     return ["input.csv", "design.json", "design.png"]
 
 

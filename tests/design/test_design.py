@@ -128,3 +128,17 @@ def test_bad_limits_are_one_line_errors(report_path):
         fwid.design_input(str(report_path), amplitude=0.1, duration=2.0, quiet=2.0)
     with pytest.raises(fwid.InputError, match="not 'lat'"):
         fwid.design_input(str(report_path), amplitude=0.1, model="lat")
+
+
+def test_a_prior_as_strong_as_the_data_halves_the_variance():
+    """One free parameter: prior information equal to the flight's halves the variance."""
+    def f(x, u, p, c):
+        return jnp.stack([p["a"] * x[0] + p["b"] * u[0]])
+
+    model = fwid.GreyBoxModel(f, states=("x",), inputs=("u",), params={"a": -2.0, "b": 1.5},
+                              free=("b",))
+    kw = dict(consts={}, R=[[1e-3]], duration=3.0, quiet=0.5, amplitude=0.2, rate=20.0,
+              attitude_limit=None, restarts=1, iterations=50)
+    d0 = fwid.design_input(model, **kw)
+    d1 = fwid.design_input(model, prior_information={"b": float(d0.std_3211[0])}, **kw)
+    assert d1.std_3211[0] ** 2 == pytest.approx(d0.std_3211[0] ** 2 / 2, rel=1e-9)
