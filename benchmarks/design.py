@@ -308,7 +308,7 @@ def main(argv=None) -> int:
             out = Path(tmp) / "discrimination"
             out.mkdir()
             disc = run_discrimination(seeds[:1] if args.quick else seeds[:3], out, log)
-    name = "design" if args.part == "all" else f"design_{args.part}"
+    name = "design_discrimination" if args.part == "discrimination" else "design"
     RESULTS.mkdir(exist_ok=True)
     header = [f"command: {command}", f"commit: {commit}", f"date: {date}"]
     doc = {"command": command, "commit": commit, "date": date, "seeds": seeds,
@@ -320,6 +320,9 @@ def main(argv=None) -> int:
     text = markdown(["# Designed vs classic inputs", ""] + [h + "  " for h in header], results)
     if disc is not None:
         text += "\n" + markdown_discrimination(disc)
+    else:
+        text += ("\nDiscrimination: `--part discrimination` writes "
+                 "`design_discrimination.{json,md}`.\n")
     write_json(RESULTS / f"{name}.json", doc)
     write_text(RESULTS / f"{name}.md", text)
     print(text)

@@ -11,7 +11,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._errors import InputError
+from ..data._flight import Flight
 from ..models._greybox import GreyBoxModel
+from ..simulation._averaged import averaged
 from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
 from ._information import (Setting, absolute, information, log_det, prior_matrix,
@@ -128,11 +130,14 @@ def criterion(setting: Setting, t, u, base=None):
 
 
 def flown_information(setting: Setting, flown: Sequence, grid_rate: float) -> np.ndarray:
-    """The vehicle's information (relative units) of the flights already flown: each an
-    `Experiment` (its time, control column and constants), or `(t, u)` of the control."""
+    """The vehicle's information (relative units) of the flights already flown: each a
+    `Flight` (its cycle-averaged part), an `Experiment` (its time, control column and
+    constants), or `(t, u)` of the control."""
     g = len(setting.glob)
     total = np.zeros((g, g))
     for k, item in enumerate(flown or ()):
+        if isinstance(item, Flight):
+            item = averaged(item, setting.model)
         if isinstance(item, Experiment):
             u = np.asarray(item.u)[:, setting.control]
             consts = {**setting.consts, **{c: v for c, v in item.consts.items()
@@ -197,8 +202,9 @@ def design_input(
       excursion the model predicts for the 3211 of the same amplitude and length (the
       input it replaces); `None`: no bound.
     - `hold_other`: the other axis's control is held at zero (recorded in the limits).
-    - `flown`: flights already flown (`Experiment`s or `(t, u)` pairs of the control): their
-      information adds (campaign planning, flight by flight).
+    - `flown`: flights already flown (`Flight`s, `Experiment`s or `(t, u)` pairs of the
+      control): their information, predicted by the model for their inputs, adds (campaign
+      planning, flight by flight).
     - `prior_information`: a prior on the vehicle's parameters, `{name: std}` or an
       information matrix in their units.
     - `progress`: `True` prints a progress line per 50 steps.
