@@ -154,8 +154,6 @@ def discriminate(args) -> int:
 
     check_paths(train)
     (records,) = read_sets(train, require=DIAGNOSE_COLUMNS[axis][:5], vehicle_for=axis)
-    import numpy as np
-
     import fwid
     from fwid.report._design import write_discrimination
 
