@@ -267,7 +267,8 @@ def design_input(
         if bound is None:
             return u
         _, ys = simulate(mdl, setting.experiment(grid.t, u))
-        return u * jnp.minimum(1.0, bound / jnp.max(jnp.abs(ys[:, att])))
+        peak = jnp.max(jnp.abs(ys[:, att]))
+        return u * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, bound / peak), 0.0)
 
     def loss(x):
         c, ys = crit_of(bounded(signal(x)))

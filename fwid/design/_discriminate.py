@@ -135,7 +135,8 @@ def design_discriminating(
             return u
         ya, yb = responses(u)
         peak = jnp.maximum(jnp.max(jnp.abs(ya[:, att])), jnp.max(jnp.abs(yb[:, att])))
-        return u * jnp.minimum(1.0, bound / peak)
+        # a prediction that diverges (a nonlinear model) counts as over the bound
+        return u * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, bound / peak), 0.0)
 
     if parametrisation == "multisine":
         freqs = harmonics(grid, (max(band[0], 1e-9), band[1]))
@@ -169,6 +170,9 @@ def design_discriminating(
                          progress=progress, label="discriminating design")
     u = np.asarray(bounded(signal(jnp.asarray(xs[int(np.argmin(fs))]))))
     D, ya, yb = distance(jnp.asarray(u))
+    if not np.isfinite(float(D)) or float(D) <= 0:
+        raise InputError("design: the two models' predictions diverge (or agree) for every "
+                         "input tried; lower the amplitude or give an attitude bound")
     D3, ya3, yb3 = distance(jnp.asarray(u3211))
 
     def peak(*ys):
