@@ -24,9 +24,7 @@ adding a second 3211 instead.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
-import subprocess
 import sys
 import tempfile
 import time
@@ -223,9 +221,9 @@ def run_discrimination(seeds, out: Path, log) -> dict:
 
     rows = []
     grid = Grid(DURATION, QUIET, 100.0)
-    for true, rival in PAIRS:
+    for j, (true, rival) in enumerate(PAIRS):
         for seed in seeds:
-            base = 100 * seed
+            base = 100 * seed + 1000 * j
             train = [_synth_flight(true, None, None, base + i, out, f"{true}_{seed}_tr{i}")
                      for i in range(2)]
             test = [_synth_flight(true, None, None, base + 10 + i, out, f"{true}_{seed}_te{i}")
@@ -308,10 +306,10 @@ def main(argv=None) -> int:
     ap.add_argument("--part", choices=("inputs", "discrimination", "all"), default="all")
     args = ap.parse_args(argv)
     seeds = list(range(args.seeds or (3 if args.quick else 8)))
-    command = "python " + " ".join(["benchmarks/design.py", *(argv or sys.argv[1:])])
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                            cwd=Path(__file__).parent).stdout.strip()
-    date = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    sys.path.insert(0, str(Path(__file__).parent))
+    import _provenance
+
+    prov = _provenance.provenance(None if argv is None else ["benchmarks/design.py", *argv])
 
     def log(msg):
         print(f"design benchmark: {msg}", flush=True)
@@ -329,20 +327,21 @@ def main(argv=None) -> int:
             disc = run_discrimination(seeds[:1] if args.quick else seeds[:3], out, log)
     name = "design_discrimination" if args.part == "discrimination" else "design"
     RESULTS.mkdir(exist_ok=True)
-    header = [f"command: {command}", f"commit: {commit}", f"date: {date}"]
-    doc = {"command": command, "commit": commit, "date": date, "seeds": seeds,
+    doc = {"seeds": seeds,
            "amplitude_rad": AMPLITUDE, "duration_s": DURATION, "quiet_s": QUIET,
            "derivatives": DERIVS, "results": results,
            "discrimination": disc}
     from fwid.report._json import write_json, write_text
 
-    text = markdown(["# Designed vs classic inputs", ""] + [h + "  " for h in header], results)
+    text = markdown(["# Designed vs classic inputs"], results) if results else \
+        "# Telling two effects apart\n"
     if disc is not None:
         text += "\n" + markdown_discrimination(disc)
     else:
         text += ("\nDiscrimination: `--part discrimination` writes "
                  "`design_discrimination.{json,md}`.\n")
-    write_json(RESULTS / f"{name}.json", doc)
+    write_json(RESULTS / f"{name}.json", _provenance.stamped(doc, prov))
+    text = _provenance.markdown(text, prov)
     write_text(RESULTS / f"{name}.md", text)
     print(text)
     return 0
