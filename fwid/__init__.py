@@ -58,7 +58,7 @@ EXPORTS = {
     "estimate": (
         "RelaxedGaussNewton", "FitResult", "fit", "fit_each", "least_squares_start",
         "fit_shooting", "fit_filter_error", "FilterErrorResult", "steady_state_gain",
-        "initialize_distributed",
+        "initialize_distributed", "prior_from", "prior_information",
     ),
     "diagnosis": (
         "CATALOGUE", "Diagnosis", "diagnose",

@@ -89,6 +89,13 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: one overview of all flights' fits (the worst and best few "
                    "when many) and the poles (summary), plus one figure per flight (all), or "
                    "none; flap/combined: their figures (summary, all) or none")
+    i.add_argument("--prior", default=None, metavar="PRIOR.json",
+                   help="lon/lat: a Gaussian prior on parameters, {\"Mq\": {\"mean\": .., "
+                   "\"std\": ..}, ..}, or an earlier report.json (its parameters and std): "
+                   "the fit is the maximum a posteriori estimate")
+    i.add_argument("--bounds", default=None, metavar="BOUNDS.json",
+                   help="lon/lat: parameter bounds, {\"Mq\": {\"low\": .., \"high\": ..}, ..} "
+                   "(null or a missing key: open), kept by a bounded Gauss-Newton step")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
 
     d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "
