@@ -20,7 +20,7 @@ from ._information import (Setting, absolute, information, log_det, prior_matrix
                            vehicle_information)
 from ._optimise import _say, minimise
 from ._signals import Grid, harmonics, input_3211, multisine, steps, step_index
-from ._source import ATTITUDE, CONTROL, from_identification, from_report
+from ._source import ATTITUDE, CONTROL, from_identification, from_report, report_prior
 
 #: The share of a given attitude limit the model's prediction may use (the rest is the
 #: margin for its error).
@@ -206,7 +206,7 @@ def design_input(
       control): their information, predicted by the model for their inputs, adds (campaign
       planning, flight by flight).
     - `prior_information`: a prior on the vehicle's parameters, `{name: std}` or an
-      information matrix in their units.
+      information matrix in their units; default: the prior of the report's fit, if any.
     - `progress`: `True` prints a progress line per 50 steps.
 
     **Returns:** a [`fwid.design.Design`][].
@@ -224,6 +224,11 @@ def design_input(
     att = mdl.outputs.index(attitude) if attitude in mdl.outputs else None
     setting = Setting(mdl, cst, Rm, control)
     grid = Grid(duration, quiet, rate)
+    if prior_information is None and isinstance(model_or_identification, (str, dict)):
+        prior_information = report_prior(model_or_identification)  # the fit's own prior
+    if isinstance(prior_information, dict):  # only the vehicle's parameters
+        vehicle = {setting.names[i] for i in setting.glob}
+        prior_information = {k: v for k, v in prior_information.items() if k in vehicle} or None
     prior = prior_matrix(setting, prior_information)
     base = flown_information(setting, flown, rate) + prior
     if att is None or attitude_limit is None:

@@ -91,3 +91,14 @@ def from_identification(ident) -> tuple[GreyBoxModel, dict, np.ndarray, str]:
     consts = {k: float(np.asarray(v)) for k, v in dict(ident.consts).items()
               if k in model.constants}
     return model, consts, np.asarray(ident.fit.R, float), "fit.R of the identification"
+
+
+def report_prior(report) -> dict | None:
+    """The Gaussian prior the report's fit used (`"prior"`: `{name: {"mean", "std"}}`, written
+    by `fwid identify` when `fwid.fit(prior=...)` had one) as `{name: std}`, or `None`: a design
+    from such a report counts the prior's information once, beside the flights'."""
+    rep = _read(report) if not isinstance(report, dict) else report
+    prior = rep.get("prior") or {}
+    out = {k: float(v["std"]) for k, v in prior.items()
+           if isinstance(v, dict) and v.get("std") not in (None, 0)}
+    return out or None

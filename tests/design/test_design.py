@@ -142,3 +142,13 @@ def test_a_prior_as_strong_as_the_data_halves_the_variance():
     d0 = fwid.design_input(model, **kw)
     d1 = fwid.design_input(model, prior_information={"b": float(d0.std_3211[0])}, **kw)
     assert d1.std_3211[0] ** 2 == pytest.approx(d0.std_3211[0] ** 2 / 2, rel=1e-9)
+
+
+def test_the_prior_of_a_report_is_read_as_stds():
+    from tests.design.conftest import lon_report
+    from fwid.design._source import report_prior
+
+    rep = lon_report()
+    assert report_prior(rep) is None
+    rep["prior"] = {"Mq": {"mean": -1e-3, "std": 2e-4}, "Zw": {"mean": -0.07, "std": None}}
+    assert report_prior(rep) == {"Mq": 2e-4}
