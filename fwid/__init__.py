@@ -73,6 +73,9 @@ EXPORTS = {
         "cutoff_cost", "eigenvalue_sensitivity", "estimate_sensitivity_to_cutoff",
         "metric_sensitivity", "output_sensitivity", "rank_sensitivities",
     ),
+    "design": (
+        "Design", "Discrimination", "design_discriminating", "design_input",
+    ),
     "identification": (
         "CombinedIdentification", "FlappingIdentification", "FlightFit", "Identification",
         "JointComparison", "SteadyVsManoeuvre", "compare_joint", "evaluate", "identify",
