@@ -54,7 +54,7 @@ def nominal_rates(R: np.ndarray, dt: float) -> np.ndarray:
 
 
 def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
-                    start=None, passes: int = PASSES, params=None) -> Attitude:
+                    start=None, passes: int = PASSES, params=None, lengths=None) -> Attitude:
     """Smooth a batch of attitude records of one length.
 
     **Arguments:**
@@ -66,7 +66,9 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
     - `start` `(B, N, 3, 3)`: a nominal to start from (default: the record, gaps filled);
     - `params`: noise parameters per problem (`B * 3`, take-major) to reuse; with a gyro,
       its noise is still searched (the motion's levels kept);
-    - `passes`: passes of the iterated smoother.
+    - `passes`: passes of the iterated smoother;
+    - `lengths` `(B,)`: each record's samples where records of several lengths are padded
+      to one `N` (`tracked`, `gyro_mask` False there; see `smooth_batch`).
 
     **Returns:** an `Attitude`.
     """
@@ -93,7 +95,8 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
         wn = nominal_rates(nom, dt)
         z = np.where(tracked[..., None], log_so3(np.swapaxes(nom, -1, -2) @ Rm), 0.0)
         sm = smooth_batch(axes(z), mask3, ph3, om3, dt, gyro=g3, gyro_mask=gm3,
-                          u=axes(-dt * wn), scale=ATTITUDE_SCALE, params=params)
+                          u=axes(-dt * wn), scale=ATTITUDE_SCALE, params=params,
+                          lengths=None if lengths is None else np.repeat(lengths, 3))
         params = sm.params
         nom = nom @ exp_so3(back(sm.pos))
     per = lambda x: None if x is None else x.reshape(B, 3)  # noqa: E731

@@ -57,45 +57,73 @@ def _groups(items, key):
     return out.values()
 
 
-def _stack(xs):
-    return np.stack(xs)
+#: Takes are padded to a multiple of this many samples (unmeasured samples after the end),
+#: so that takes of nearly one length run in one vmapped call of one compiled program.
+BUCKET = 256
+
+
+def _stack(xs, n=None, fill=0.0):
+    """`xs` (time first) stacked, each padded to `n` samples (`fill`, or `"edge"`)."""
+    if n is None:
+        return np.stack(xs)
+    out = []
+    for x in xs:
+        x = np.asarray(x)
+        pad = [(0, n - len(x))] + [(0, 0)] * (x.ndim - 1)
+        out.append(np.pad(x, pad, mode="edge") if fill == "edge"
+                   else np.pad(x, pad, constant_values=fill))
+    return np.stack(out)
+
+
+def _bucket(lengths) -> int:
+    return int(-(-max(lengths) // BUCKET) * BUCKET)
 
 
 def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, params=None,
               passes=None):
-    """Smooth the attitude of several takes, vmapped by length (`passes`: per take)."""
+    """Smooth the attitude of several takes, vmapped by sample step and padded to one length
+    (`passes`: per take)."""
     out = [None] * len(takes)
-    key = (lambda i: (len(tracked[i]), round(takes[i].dt, 12), None if passes is None
-                      else passes[i]))
+    key = (lambda i: (round(takes[i].dt, 12), None if passes is None else passes[i]))
     for idx in _groups(range(len(takes)), key):
         dt = takes[idx[0]].dt
+        lens = np.array([len(tracked[i]) for i in idx])
+        n = _bucket(lens)
         ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
         kw = {}
         if gyros is not None:
-            kw = {"gyro": _stack([gyros[i] for i in idx]), "gyro_mask": _stack([gmasks[i] for i in idx])}
+            kw = {"gyro": _stack([gyros[i] for i in idx], n),
+                  "gyro_mask": _stack([gmasks[i] for i in idx], n, False)}
         if starts is not None:
-            kw["start"] = _stack([starts[i] for i in idx])
+            kw["start"] = _stack([starts[i] for i in idx], n, "edge")
         if params is not None:
             kw["params"] = [p for i in idx for p in params[i]]
         if passes is not None:
             kw["passes"] = passes[idx[0]]
-        att = smooth_attitude(_stack([quats[i] for i in idx]), _stack([tracked[i] for i in idx]),
-                              _stack(ph), _stack(om), dt, **kw)
+        att = smooth_attitude(_stack([quats[i] for i in idx], n, np.nan),
+                              _stack([tracked[i] for i in idx], n, False),
+                              _stack(ph, n, "edge"), _stack(om, n, np.nan), dt, lengths=lens, **kw)
         for j, i in enumerate(idx):
-            out[i] = type(att)(*(None if v is None else (v[3 * j:3 * j + 3] if k == "params" else v[j])
+            out[i] = type(att)(*(None if v is None else (v[3 * j:3 * j + 3] if k == "params" else
+                                                         v[j, :lens[j]] if k in ("R", "w", "a") else v[j])
                                  for k, v in att._asdict().items()))
     return out
 
 
 def _translation(takes, pos, tracked, fs):
     out = [None] * len(takes)
-    for idx in _groups(range(len(takes)), lambda i: (len(tracked[i]), round(takes[i].dt, 12))):
+    for idx in _groups(range(len(takes)), lambda i: round(takes[i].dt, 12)):
         dt = takes[idx[0]].dt
+        lens = np.array([len(tracked[i]) for i in idx])
+        n = _bucket(lens)
         ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
-        sm = smooth_batch(_stack([pos[i] for i in idx]), _stack([tracked[i] for i in idx]),
-                          _stack(ph), _stack(om), dt, scale=1e-6)
+        sm = smooth_batch(_stack([pos[i] for i in idx], n, np.nan),
+                          _stack([tracked[i] for i in idx], n, False),
+                          _stack(ph, n, "edge"), _stack(om, n, np.nan), dt, scale=1e-6, lengths=lens)
         for j, i in enumerate(idx):
-            out[i] = type(sm)(*(v[j] if isinstance(v, np.ndarray) else v for v in sm))
+            out[i] = type(sm)(*(v[j, :lens[j]] if k in ("pos", "vel", "acc") else
+                                v[j] if isinstance(v, np.ndarray) else v
+                                for k, v in sm._asdict().items()))
     return out
 
 

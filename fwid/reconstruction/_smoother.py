@@ -40,18 +40,21 @@ def _fns():
     return _JIT
 
 
-def _active_window(z, u, mask, dt) -> np.ndarray:
+def _active_window(z, u, mask, dt, lengths=None) -> np.ndarray:
     """Sample indices `(M, W)` of each problem's most active `ML_WINDOW` samples, where the
     noise levels are chosen: the window with the largest energy of the second difference of
     the measured path (`z` less the summed inputs `u`), averaged over ~0.1 s (a take that is
-    quiet but for its manoeuvre must be smoothed as its manoeuvre needs)."""
+    quiet but for its manoeuvre must be smoothed as its manoeuvre needs). `lengths` `(M,)`:
+    each problem's own samples (the rest pads it to the batch's length), all by default."""
     M, N = mask.shape
     W = min(N, ML_WINDOW)
+    lengths = np.full(M, N) if lengths is None else np.asarray(lengths, int)
     path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
     k = max(1, int(round(0.1 / dt)))
     out = np.empty((M, W), int)
     for m in range(M):
-        y = path[m]
+        N = int(lengths[m])
+        y = path[m, :N]
         good = np.isfinite(y[:, 0])
         y = np.stack([np.interp(np.arange(N), np.flatnonzero(good), c[good]) for c in y.T], 1)
         kernel = np.ones(k) / k
@@ -60,7 +63,7 @@ def _active_window(z, u, mask, dt) -> np.ndarray:
         a[1:-1] = np.sum((sm[2:] - 2 * sm[1:-1] + sm[:-2]) ** 2, 1)
         a[:k], a[-k:] = 0.0, 0.0  # the convolution's edges
         c = np.concatenate([[0.0], np.cumsum(a)])
-        start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0
+        start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0  # past N: the padding
         out[m] = np.arange(start, start + W)
     return out
 
@@ -97,7 +100,7 @@ class Smoothed(NamedTuple):
 
 
 def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None, u=None,
-                 scale: float = 1e-6, params=None) -> Smoothed:
+                 scale: float = 1e-6, params=None, lengths=None) -> Smoothed:
     """Smooth `M` independent problems of one length `N`, each with `c` data columns that
     share the noise levels.
 
@@ -110,7 +113,11 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
       increment), or None;
     - `scale`: the measurement variance guessed, for the diffuse prior;
     - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search;
-      with `gyro_ratio` None, only the gyro's noise is searched.
+      with `gyro_ratio` None, only the gyro's noise is searched;
+    - `lengths` `(M,)`: the samples of each problem, where problems of several lengths are
+      padded to one `N` (the padding unmeasured: `mask`, `gyro_mask` False, `omega` NaN,
+      `u` 0, which leaves the smoothed samples before it exactly as they were; one compiled
+      program for all); default: all `N`.
 
     **Returns:** a `Smoothed`.
     """
@@ -147,7 +154,7 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
                                            mdl.GYRO_RATIOS if bias else (1.0,)))] * M
         else:  # the motion's levels known (from the attitude alone): the gyro's noise only
             grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
-        idx = _active_window(z, U[:, :, 0, :], mask, dt)  # (M, W)
+        idx = _active_window(z, U[:, :, 0, :], mask, dt, lengths)  # (M, W)
         take = lambda a: np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)  # noqa: E731
         Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
         Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
