@@ -31,12 +31,25 @@ def _update(x, P, h, z, r, valid):
     return x, P, S, nu, K
 
 
-def filter_stats(F, Q, H, R, z, mask, u, m0, P0):
+def _propagate(F, x, P, Q, lead):
+    """`F x`, `F P F^T + Q`; with `lead`, for `F = blockdiag(F[:lead, :lead], I)` (only the
+    leading states mix, as in `_model.transition`) at a fraction of the dense products."""
+    if lead is None:
+        return F @ x, F @ P @ F.T + Q
+    Fa = F[:lead, :lead]
+    x = x.at[:lead].set(Fa @ x[:lead])
+    P = P.at[:lead].set(Fa @ P[:lead])
+    P = P.at[:, :lead].set(P[:, :lead] @ Fa.T)
+    return x, P + Q
+
+
+def filter_stats(F, Q, H, R, z, mask, u, m0, P0, lead=None):
     """The innovation statistics of the filter: `(sum log S, sum nu^2 / S, count)` over the
     valid scalar measurements after `BURN_IN` samples, each counted once per data column.
 
     **Arguments:** `F`, `Q` `(n, n)`; `H` `(N, m, n)`; `R` `(m,)`; `z` `(N, m, c)`; `mask`
-    `(N, m)`; `u` `(N, n, c)`; `m0` `(n, c)`; `P0` `(n, n)`.
+    `(N, m)`; `u` `(N, n, c)`; `m0` `(n, c)`; `P0` `(n, n)`; `lead`: where `F` is the
+    identity but for its leading `lead x lead` block (faster), or None.
     """
     c = z.shape[-1]
 
@@ -47,9 +60,8 @@ def filter_stats(F, Q, H, R, z, mask, u, m0, P0):
             x, P, S, nu, _ = _update(x, P, h_k[i], z_k[i], R[i], mk[i])
             use = mk[i] & (k >= BURN_IN)
             acc = acc + jnp.where(use, jnp.array([c * jnp.log(S), jnp.sum(nu**2) / S, c]), 0.0)
-        x = F @ x + u_k
-        P = F @ P @ F.T + Q
-        return (x, P, acc), None
+        x, P = _propagate(F, x, P, Q, lead)
+        return (x + u_k, P, acc), None
 
     ks = jnp.arange(z.shape[0])
     (_, _, acc), _ = jax.lax.scan(step, (m0, P0, jnp.zeros(3)), (H, z, mask, u, ks))
@@ -64,7 +76,7 @@ def concentrated_loglik(acc: Float[Array, "... 3"]) -> Float[Array, "..."]:
     return -0.5 * (n * jnp.log(s) + logS + n)
 
 
-def smooth(F, Q, H, R, z, mask, u, m0, P0):
+def smooth(F, Q, H, R, z, mask, u, m0, P0, lead=None):
     """Smoothed means `(N, n, c)` and the innovation statistics (`filter_stats`), arguments
     as there.
 
@@ -85,7 +97,8 @@ def smooth(F, Q, H, R, z, mask, u, m0, P0):
             acc = acc + jnp.where(use, jnp.array([c * jnp.log(S), jnp.sum(nu**2) / S, c]), 0.0)
             Ks.append(jnp.where(mk[i], K, 0.0))
             Ws.append(jnp.where(mk[i], nu / S, 0.0))
-        return ((F @ x + u_k, F @ P @ F.T + Q, acc),
+        x, P = _propagate(F, x, P, Q, lead)
+        return ((x + u_k, P, acc),
                 (x_pred, P_pred, jnp.stack(Ks), jnp.stack(Ws)))
 
     ks = jnp.arange(z.shape[0])
@@ -94,7 +107,10 @@ def smooth(F, Q, H, R, z, mask, u, m0, P0):
 
     def backward(lam_next, inp):
         xp_k, Pp_k, K_k, W_k, h_k = inp
-        lam = F.T @ lam_next
+        if lead is None:
+            lam = F.T @ lam_next
+        else:
+            lam = lam_next.at[:lead].set(F[:lead, :lead].T @ lam_next[:lead])
         for i in reversed(range(h_k.shape[0])):
             lam = lam + h_k[i][:, None] * (W_k[i] - K_k[i] @ lam)[None, :]
         return lam, xp_k + Pp_k @ lam

@@ -31,6 +31,10 @@ COEFF_BANDWIDTHS = (0.03, 0.1, 0.3, 1.0, 3.0)
 GYRO_RATIOS = (3.0, 10.0, 30.0, 100.0)
 
 
+#: `transition` is the identity but for its leading `MIXING x MIXING` block.
+MIXING = 3
+
+
 def n_states(bias: bool) -> int:
     return 3 + 2 * HARMONICS + int(bias)
 

@@ -28,9 +28,15 @@ _JIT = {}
 
 def _fns():
     if not _JIT:
+        import functools
+
         import jax
 
         from ._kalman import concentrated_loglik, filter_stats, smooth
+
+        lead = mdl.MIXING  # F = blockdiag(3 x 3, I): the structured products
+        filter_stats = functools.partial(filter_stats, lead=lead)
+        smooth = functools.partial(smooth, lead=lead)
 
         stats = jax.vmap(jax.vmap(filter_stats, in_axes=(None, 0, None, 0, None, None, None,
                                                          None, None)),

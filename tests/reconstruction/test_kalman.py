@@ -4,12 +4,14 @@ measurements per step, known inputs and several data columns."""
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from fwid.reconstruction import _model as mdl
 from fwid.reconstruction._kalman import smooth
 
 
-def test_smoother_equals_batch_least_squares():
+@pytest.mark.parametrize("lead", [None, mdl.MIXING])  # dense F, or its leading block only
+def test_smoother_equals_batch_least_squares(lead):
     N, dt, rng = 120, 0.005, np.random.default_rng(0)
     F, Q = mdl.transition(dt, False), mdl.process_noise(dt, 1e3, 1e5, False)
     n = F.shape[0]
@@ -19,7 +21,7 @@ def test_smoother_equals_batch_least_squares():
     mask = rng.random((N, 2)) > 0.2
     u = 0.01 * rng.standard_normal((N, n, 3))
     m0, P0 = np.zeros((n, 3)), 10 * np.eye(n)
-    xs, _ = smooth(*(jnp.asarray(a) for a in (F, Q, H, R, z, mask, u, m0, P0)))
+    xs, _ = smooth(*(jnp.asarray(a) for a in (F, Q, H, R, z, mask, u, m0, P0)), lead=lead)
 
     def whiten(C):
         w, V = np.linalg.eigh(C)
