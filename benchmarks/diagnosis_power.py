@@ -180,7 +180,7 @@ def run_case(case: dict) -> dict:
     lead = rec.get("unexplained") if diag.verdict == "unexplained" else (
         (rec.get("effects_detail") or [None])[0])
     rec["near_tie"] = bool(lead["near_tie"]) if lead and "near_tie" in lead else None
-    for k in ("disturbance", "first_round", "rounds"):
+    for k in ("disturbance", "first_round", "rounds", "confidence_set"):
         if getattr(diag, k, None) is not None:
             rec[k] = getattr(diag, k)
     return rec

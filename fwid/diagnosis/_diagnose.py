@@ -13,6 +13,7 @@ from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
 from ._catalogue import CATALOGUE, Effect
+from ._confidence import LEVEL, as_rows, confidence_set, explanations
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
@@ -63,6 +64,7 @@ class Diagnosis:
     simulation: dict | None = None
     process_noise: dict | None = None
     models: SimulationGap | None = dataclasses.field(default=None, repr=False)
+    confidence_set: list[dict] = dataclasses.field(default_factory=list)
     settings: dict = dataclasses.field(default_factory=dict)
 
     def candidate(self, name: str) -> dict:
@@ -90,6 +92,7 @@ class Diagnosis:
             "train": self.train,
             "test": self.test,
             "candidates": self.candidates,
+            "confidence_set": self.confidence_set,
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
@@ -355,6 +358,10 @@ def diagnose(
         effects, unexplained, in_sim = name_effects(sel)
         if not effects:  # a probe first on the same residual tracks the disturbance too
             unexplained = None
+    say("the confidence set of explanations (model confidence set over the held-out blocks)")
+    found = explanations(engine, halves, set_aside.first, tuple(catalogue) + tuple(probes),
+                         [e for e, _ in sel.chosen])
+    kept = as_rows(confidence_set(found), found[0])
     chosen = [e.name for e, _ in sel.chosen]
     last, levels = {**set_aside.last, **sel.last}, {**set_aside.level, **sel.level}
     augmented: dict = {}
@@ -454,6 +461,7 @@ def diagnose(
         residuals=before,
         augmented=augmented,
         measured=measured,
+        confidence_set=kept,
         settings={
             "baseline": "Eqs. 2-6 below the split + Eq. 12 (3 harmonics) above it, "
                         "per-flight trim and Fourier coefficients, equation error",
@@ -470,6 +478,10 @@ def diagnose(
             "secondary_share": SECONDARY_SHARE,
             "tie_share": TIE_SHARE,
             "block_s": BLOCK_S,
+            "confidence_level": LEVEL,
+            "confidence_set": f"model confidence set (Hansen, Lunde & Nason 2011, T_max, "
+                              f"block bootstrap over the scoring blocks) at level {LEVEL:g} "
+                              f"over none, each candidate and probe, pairs and the selection",
             "blocks": len(trb_idx) + len(teb_idx),
             "loads": list(loads),
         },

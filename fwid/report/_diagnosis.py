@@ -53,6 +53,24 @@ def _convergence_caution(sim: dict) -> str:
             "read the shrink as rough")
 
 
+def _explanation_text(names: list[str]) -> str:
+    return " + ".join(names) if names else "none"
+
+
+def confidence_set_line(d: Diagnosis) -> str | None:
+    """The confidence set in words: "X, or Y: these flights cannot tell them apart" when it
+    holds more than one explanation; `None` when it holds one (or none was built)."""
+    kept = d.confidence_set
+    if len(kept) < 2:
+        return None
+    names = ", or ".join(_explanation_text(x["explanation"]) for x in kept)
+    detail = "; ".join(f"{_explanation_text(x['explanation'])} {x['gain_pct']:.1f} %, "
+                       f"p = {x['p_value']:.2g}" for x in kept)
+    return (f"  {names}: these flights cannot tell them apart (the model confidence set of the "
+            f"explanations at {100 * d.settings.get('confidence_level', 0.1):g} %; held-out "
+            f"gain and p value: {detail})")
+
+
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
@@ -110,6 +128,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
+    cs = confidence_set_line(d)
+    if cs:
+        lines.append(cs)
     lead = (d.unexplained if d.verdict == "unexplained" else
             d.effects[0] if d.effects and d.effects[0]["effect"] == d.verdict else None)
     if lead is not None and lead.get("near_tie"):
