@@ -224,6 +224,78 @@ def pairs(results) -> list[str]:
     return lines
 
 
+def _named(explanation: list[str]) -> frozenset[str]:
+    """The catalogue entries of an explanation of the confidence set (probes left out)."""
+    from fwid.diagnosis import EFFECT_NAMES
+
+    return frozenset(e for e in explanation if e in EFFECT_NAMES)
+
+
+def set_score(r: dict) -> dict | None:
+    """How a case's confidence set (`confidence_set`: explanations, best first) scores:
+    `covered` (single: an explanation names the injected effect and no other entry; pair: one
+    holds both), `decisive` (single: every explanation names the injected effect and no
+    other), `alarm` (clean, out of catalogue: an explanation names an entry) and `best` (the
+    best explanation's first effect as a verdict: a probe is `unexplained`, none `none`).
+    `None` without a set."""
+    kept = r.get("confidence_set")
+    if not kept:
+        return None
+    named = [_named(x["explanation"]) for x in kept]
+    first = kept[0]["explanation"]
+    from fwid.diagnosis import EFFECT_NAMES
+
+    best = "none" if not first else first[0] if first[0] in EFFECT_NAMES else "unexplained"
+    truth = frozenset(r["effect"].split("+")) if r["kind"] in ("single", "pair") else None
+    return {"covered": truth is not None and (truth in named if r["kind"] == "single"
+                                              else any(truth <= n for n in named)),
+            "decisive": r["kind"] == "single" and all(n == truth for n in named),
+            "alarm": r["kind"] in ("clean", "out") and any(named),
+            "best": best, "size": len(kept)}
+
+
+def set_table(results) -> list[str]:
+    """Coverage, decisiveness, false alarms and pairs of the confidence set, per flight count
+    (single effects at strength 1 and all strengths), beside the verdict's rate."""
+    rows = [(r, set_score(r)) for r in results if "verdict" in r]
+    rows = [(r, s) for r, s in rows if s is not None]
+    if not rows:
+        return ["(no confidence sets recorded)"]
+    out = ["| cases | n | coverage | decisive | verdict right | best explanation right | "
+           "mean set size |", "|---|---|---|---|---|---|---|"]
+
+    def line(label, sel):
+        if not sel:
+            return
+        n = len(sel)
+        cov = sum(s["covered"] for _, s in sel)
+        dec = sum(s["decisive"] for _, s in sel)
+        ok = sum(bool(right(r)) for r, _ in sel)
+        best = sum(s["best"] == r["effect"] for r, s in sel)
+        size = sum(s["size"] for _, s in sel) / n
+        out.append(f"| {label} | {n} | {cov}/{n} | {dec}/{n} | {ok}/{n} | {best}/{n} | "
+                   f"{size:.1f} |")
+
+    single = [(r, s) for r, s in rows if r["kind"] == "single"]
+    for n in sorted({r["n"] for r, _ in single}):
+        line(f"single, strength 1, {n}+{n}",
+             [(r, s) for r, s in single if r["n"] == n and r["strength"] == 1.0])
+    line("single, all strengths", single)
+    pairs_ = [(r, s) for r, s in rows if r["kind"] == "pair"]
+    if pairs_:
+        out += ["", f"Pairs: a kept explanation holds both effects in "
+                f"{sum(s['covered'] for _, s in pairs_)}/{len(pairs_)} (both in `effects`: "
+                f"{sum(bool(right(r)) for r, _ in pairs_)}/{len(pairs_)})."]
+    quiet = [(r, s) for r, s in rows if r["kind"] in ("clean", "out")]
+    if quiet:
+        out += ["", f"False alarms: a catalogue name in the set of "
+                f"{sum(s['alarm'] for _, s in quiet)}/{len(quiet)} clean and out-of-catalogue "
+                f"cases (in the verdict: {sum(not right(r) for r, _ in quiet)}/{len(quiet)}; "
+                f"the best explanation names one in "
+                f"{sum(s['best'] not in NOT_NAMED for _, s in quiet)}/{len(quiet)})."]
+    return out
+
+
 def figure(results, path: Path) -> None:
     import matplotlib
 
@@ -280,6 +352,7 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "## Confusion matrix (single effects, clean, out of catalogue)", "", *confusion(results),
           "", "## Two effects at once", "", *pairs(results), "",
           "## Spurious further effects", "", *extras(results), "",
+          "## The confidence set of explanations", "", *set_table(results), "",
           "## Near ties (a rival passing with at least `TIE_SHARE` of the verdict's gain)", "",
           *near_ties(results), "",
           f"![power curves]({stem.name}.png)", ""]

@@ -17,6 +17,7 @@ from ._confidence import LEVEL, as_rows, confidence_set, explanations
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
+from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
 from ._selection import (ALPHA, MIN_GAIN, SECONDARY_SHARE, TIE_SHARE, forward_select,
@@ -65,6 +66,7 @@ class Diagnosis:
     process_noise: dict | None = None
     models: SimulationGap | None = dataclasses.field(default=None, repr=False)
     confidence_set: list[dict] = dataclasses.field(default_factory=list)
+    states: dict | None = None
     settings: dict = dataclasses.field(default_factory=dict)
 
     def candidate(self, name: str) -> dict:
@@ -97,6 +99,7 @@ class Diagnosis:
             "probes": self.probes,
             "disturbance": self.disturbance,
             "process_noise": self.process_noise,
+            "states": self.states,
             "simulation": self.simulation,
             "localisation": self.localisation,
             "first_round": self.first_round,
@@ -168,6 +171,7 @@ def diagnose(
     folds: int | None = None,
     simulation: bool = True,
     process_noise: bool = True,
+    reconstruction: Sequence[dict | None] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """Diagnose the sim-to-real gap of the paper's model on held-out flights.
@@ -232,7 +236,10 @@ def diagnose(
     simulated on the test flights; `Diagnosis.models` keeps both identifications),
     `process_noise` (with a `"random-disturbance"` verdict, also fit the baseline by filter
     error on the training flights, Jategaonkar Ch. 5, `_process_noise.py`: the process noise
-    as evidence; a failed fit is recorded in the block, never raised), `progress` (called with a line of text at each stage).
+    as evidence; a failed fit is recorded in the block, never raised), `reconstruction`
+    (per training then test flight, its entry in the `reconstruction.json` beside it, as
+    `read_reconstruction` returns them: reported beside the verdict as the `states` block,
+    `_provenance.py`), `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
     check_axis(train, axis, "training")
@@ -462,6 +469,7 @@ def diagnose(
         augmented=augmented,
         measured=measured,
         confidence_set=kept,
+        states=provenance([f.name for f in flights], reconstruction),
         settings={
             "baseline": "Eqs. 2-6 below the split + Eq. 12 (3 harmonics) above it, "
                         "per-flight trim and Fourier coefficients, equation error",

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..diagnosis import BAND_NAMES, Diagnosis
+from ..diagnosis._provenance import provenance_text
 from ..diagnosis._selection import RATES_MARGIN
 from ..diagnosis._signals import AXIS_LOADS
 
@@ -110,6 +111,12 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      "filter-error fit models it")
         if d.process_noise is not None:
             lines.append("  " + _process_noise_line(d.process_noise))
+        if (d.states or {}).get("reconstructed") != "all":
+            lines.append("  It may be process noise (a disturbance the vehicle felt) or coloured "
+                         "errors in user-supplied states (a filter's lag, a gyro bias walk, "
+                         "smoothed velocities): these flights cannot tell them apart. "
+                         "Reconstructing the states from the raw recordings (fwid reconstruct) "
+                         "removes that doubt")
     elif d.verdict == "unexplained":
         u = d.unexplained
         drv = ", ".join(f"{x['signal']} {x['share_pct']:.0f} %" for x in u["drivers"])
@@ -128,6 +135,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
+    st = provenance_text(d.states)
+    if st:
+        lines.append(f"  states: {st}")
     cs = confidence_set_line(d)
     if cs:
         lines.append(cs)

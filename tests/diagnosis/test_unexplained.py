@@ -65,6 +65,19 @@ def test_gusts_are_a_random_disturbance(effect_flights, tmp_path):
     assert set(dist["rms"]) == {"X", "Z", "M"} and all(v > 0 for v in dist["rms"].values())
     assert len(dist["psd"]["M"]) == len(dist["bands_hz"])
     assert "VERDICT: random-disturbance" in diagnosis_summary(d)
+    # user-supplied states: the doubt is said, with the way to remove it; states rebuilt by
+    # fwid reconstruct: their consistency figures instead
+    assert d.states["reconstructed"] == "none"
+    text = diagnosis_summary(d)
+    assert "coloured errors in user-supplied states" in text and "fwid reconstruct" in text
+    d.states = fwid.diagnosis._provenance.provenance(
+        d.train + d.test, [{"flight": n, "clock_offset_s": 0.5, "warnings": []}
+                           for n in d.train + d.test])
+    text = diagnosis_summary(d)
+    assert "coloured errors in user-supplied states" not in text
+    assert (f"states: {len(d.train) + len(d.test)} of {len(d.train) + len(d.test)} flights "
+            "rebuilt from raw recordings by fwid reconstruct; clock offsets 0.500 to 0.500 s; "
+            "no warnings") in text
     # the evidence of process noise: the baseline fitted by filter error (Jategaonkar Ch. 5)
     write_diagnosis(d, tmp_path)
     pn = json.loads((tmp_path / "diagnosis.json").read_text())["process_noise"]
