@@ -36,84 +36,14 @@ def right(r: dict) -> bool | None:
     return set(r["effect"].split("+")) <= named
 
 
-def tentative_named(r: dict) -> set[str]:
-    """The effects of a result named after the first as `tentative` (`effects_detail`; for a
-    record written before the flag existed, from its recorded `rounds` by the same rule,
-    `fwid.diagnosis._selection.tentative`)."""
-    detail = r.get("effects_detail") or []
-    if detail and "tentative" in detail[0]:
-        return {e["effect"] for e in detail if e.get("tentative")}
-    from fwid.diagnosis._selection import tentative
-
-    rounds, named = r.get("rounds") or [], r.get("effects") or []
-    if len(named) < 2 or not rounds:
-        return set()
-    gain = {rd["added"]: rd["candidates"][rd["added"]]["gain_pct"] for rd in rounds
-            if rd["added"]}
-    return {e for e in named[1:] if tentative(gain[named[0]], gain[e])}
-
-
-def firmly_right(r: dict) -> bool | None:
-    """`right`, counting only the effects named firmly (not `tentative`) for a pair."""
-    ok = right(r)
-    if r["kind"] != "pair" or not ok:
-        return ok
-    return not set(r["effect"].split("+")) & tentative_named(r)
-
-
 def extras(results) -> list[str]:
-    """Single effects named right with more effects after them: firm and tentative."""
+    """Single effects named right with more effects after them."""
     rows = [r for r in results if r["kind"] == "single" and right(r)]
     more = [r for r in rows if len(r.get("effects") or []) > 1]
-    firm = [r for r in more if set(r["effects"][1:]) - tentative_named(r)]
     named = Counter(e for r in more for e in r["effects"][1:])
     return [f"Right single verdicts: {len(rows)}; with a further (spurious) effect: "
-            f"{len(more)}, of which {len(firm)} named firmly and {len(more) - len(firm)} only "
-            f"`tentative`. Further effects named: "
+            f"{len(more)}. Further effects named: "
             + (", ".join(f"{e} {k}" for e, k in named.most_common()) or "none") + "."]
-
-
-def near_tie(r: dict) -> bool | None:
-    """Was the verdict's effect or probe a near tie (`fwid.diagnosis._selection.near_tie`)?
-    The record's own `near_tie` (`None` where no row carries the flag: `none`,
-    `random-disturbance`); for an older record, from the first effect's row or the
-    `unexplained` record, or, written before the flag existed, from its first recorded round
-    by the same rule. `None`: nothing was selected."""
-    from types import SimpleNamespace as ns
-
-    from fwid.diagnosis._catalogue import CATALOGUE
-    from fwid.diagnosis._selection import MIN_GAIN, passes, runner_up
-    from fwid.diagnosis._selection import near_tie as rule
-
-    if "near_tie" in r:  # recorded as the user saw it
-        return r["near_tie"]
-    lead = (r.get("unexplained") if r.get("verdict") == "unexplained" else
-            (r.get("effects_detail") or [None])[0])
-    if lead is not None and "near_tie" in lead:
-        return bool(lead["near_tie"])
-    rounds = r.get("rounds") or []
-    if not rounds or not rounds[0]["added"]:
-        return None
-    rd = rounds[0]
-    rates = {e.name for e in CATALOGUE if e.rates}
-    ev = {k: ns(p=v["p"], gain=v["gain_pct"] / 100) for k, v in rd["candidates"].items()}
-    passing = {k: e for k, e in ev.items()
-               if k == rd["added"] or passes(ns(rates=k in rates), e, rd["level"], MIN_GAIN)}
-    return rule(runner_up(rd["added"], passing))
-
-
-def near_ties(results) -> list[str]:
-    """Right and wrong verdicts (single effects, clean, out of catalogue) with and without a
-    near tie: whether the flag tells the verdicts to doubt."""
-    rows = [(near_tie(r), right(r)) for r in results
-            if r["kind"] != "pair" and right(r) is not None]
-    out = ["| verdict | right | wrong | wrong share |", "|---|---:|---:|---:|"]
-    for label, flag in (("near tie", True), ("no near tie", False)):
-        ok = [x for f, x in rows if f is flag]
-        bad = len(ok) - sum(ok)
-        out.append(f"| {label} | {sum(ok)} | {bad} | "
-                   + (f"{100 * bad / len(ok):.0f} % |" if ok else "- |"))
-    return out
 
 
 def _frac(rows) -> str:
@@ -209,8 +139,6 @@ def pairs(results) -> list[str]:
         lines.append(f"| {r['effect']} | {r['form']} | {r['axis']} | {r['verdict']} | "
                      f"{', '.join(r.get('effects') or []) or '-'} | {'yes' if right(r) else 'no'} |")
     lines.append(f"\nBoth named: {_frac(rows)}.")
-    firm = sum(bool(firmly_right(r)) for r in rows)
-    lines.append(f"Both named, neither `tentative`: {firm}/{len(rows)}.")
     # an actuator delay or lag and a late log of the same deflection are one net shift of it
     shift = {"actuator-dynamics", "time-offset"}
     rest = [r for r in rows if set(r["effect"].split("+")) != shift]
@@ -353,8 +281,6 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "", "## Two effects at once", "", *pairs(results), "",
           "## Spurious further effects", "", *extras(results), "",
           "## The confidence set of explanations", "", *set_table(results), "",
-          "## Near ties (a rival passing with at least `TIE_SHARE` of the verdict's gain)", "",
-          *near_ties(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
     stem.with_suffix(".md").write_text(text)

@@ -20,8 +20,7 @@ from ._probes import PROBES, drivers
 from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
-from ._selection import (ALPHA, MIN_GAIN, SECONDARY_SHARE, TIE_SHARE, forward_select,
-                         near_tie, tentative)
+from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
 
@@ -191,13 +190,13 @@ def diagnose(
        band, and judged by a one-sided t test across blocks (`_significance.py`). Effects are
        added by forward selection while one passes at `alpha` divided by the candidates still
        in play (`_selection.py`): `effects` lists them in the order added, each with its
-       held-out gain relative to the first's (`relative_gain`); one named after the first with
-       less than `SECONDARY_SHARE` of it is `tentative`: it may be the misfit that the first
-       effect's form leaves, not a second effect. Each row names its `runner_up` (the other
-       candidate that passed in its round with the largest gain, and its `gain_ratio`); a
-       rival with at least `TIE_SHARE` of its gain is a `near_tie`: the data barely tell the
-       two apart (every effect row and the `unexplained` probe carry it; the ratio exceeds 1
-       when the rival is an entry built on rates that gave way, `_selection.RATES_MARGIN`).
+       held-out gain relative to the first's (`relative_gain`).
+       How sure the choice is, the **confidence set** says (`_confidence.py`): every
+       explanation (none, each candidate or probe, the pairs of the best four, the
+       selection's model) that the held-out blocks cannot reject against the best at
+       `_confidence.LEVEL` (Hansen, Lunde & Nason's model confidence set), best first, each
+       with its held-out gain and p value (`confidence_set`). Two or more kept: the data
+       cannot tell them apart; a pair kept: both effects may be there.
     2. **How far**: baseline and candidates are re-fitted on the training flights only and
        scored on the test flights: RMS per load before and after, and `shrink_pct`, the drop
        of the RMS of the affected loads (each relative to its baseline RMS).
@@ -314,7 +313,7 @@ def diagnose(
         """The rows of the catalogue effects `sel` chose (`effects`), what its first probe says
         (`unexplained`), and the `(name, variant)` of the effects for the simulation."""
         effects, unexplained, model, prev, in_sim = [], None, (), rms_before, []
-        for (e, ev), rival in zip(sel.chosen, sel.rivals):
+        for e, ev in sel.chosen:
             model = model + ((e, engine.choose(train_idx, model, e, sigma2)),)
             res = test_residuals(model)
             now = rms_by_load([full(r) for r in res])
@@ -322,9 +321,7 @@ def diagnose(
             row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
                    "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
                    "shrink_pct": shrink(prev, now, affected),
-                   "test_rms_before": prev, "test_rms_after": now,
-                   "runner_up": rival}
-            row["near_tie"] = near_tie(row["runner_up"])
+                   "test_rms_before": prev, "test_rms_after": now}
             prev = now
             if e.rates and not effects and unexplained is None:
                 row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
@@ -332,7 +329,6 @@ def diagnose(
             if e.name in named and unexplained is None:
                 first = sel.chosen[0][1]
                 row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
-                row["tentative"] = bool(effects) and tentative(first.gain, ev.gain)
                 effects.append(row)
                 in_sim.append((e.name, unwrap(model[-1][1])))
             elif e.name in named:  # after structure outside the catalogue: it may only echo it
@@ -343,8 +339,7 @@ def diagnose(
                                "test_shrink_pct": row["shrink_pct"], "p": ev.p,
                                "variant": row["variant"], "affected": affected,
                                "redness_after": colour(slow_part(res), dts, own,
-                                                       own_scale)["redness"], "then": [],
-                               "runner_up": row["runner_up"], "near_tie": row["near_tie"]}
+                                                       own_scale)["redness"], "then": []}
         return effects, unexplained, in_sim
 
     disturbance = colour(slow_part(base_res), dts, own, own_scale)
@@ -483,8 +478,6 @@ def diagnose(
                             "candidates in play",
             "alpha": alpha,
             "min_gain_pct": 100 * min_gain,
-            "secondary_share": SECONDARY_SHARE,
-            "tie_share": TIE_SHARE,
             "block_s": BLOCK_S,
             "confidence_level": LEVEL,
             "confidence_set": f"model confidence set (Hansen, Lunde & Nason 2011, T_max, "

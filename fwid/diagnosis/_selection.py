@@ -50,17 +50,6 @@ ALPHA = 0.05
 MIN_GAIN = 0.02
 #: Most effects selected.
 MAX_EFFECTS = 3
-#: An effect named after the first is `tentative` when its held-out gain is below this share
-#: of the first effect's. Each catalogue entry is the generic first term of its family, so
-#: the first effect's form leaves a misfit that grows with it, and another entry can pick it
-#: up (a real, significant gain, but not a second effect). Chosen on the development half of
-#: `benchmarks/diagnosis_power.py` from the recorded rounds of its run with the trial above
-#: (`unsteady-aero` after the first effect): of the 53 effects named after the first there,
-#: 39 true and 14 spurious; at 0.25, 8 true ones are flagged and 4 spurious ones are not (the
-#: sum, 12, is the least, as at 0.1-0.2; the largest such share was taken, a spurious name
-#: costing more than a flag on a true one). On the held-out half: 11 of 12 spurious further
-#: effects flagged, and 7 of the 24 pairs named lose a flagged member.
-SECONDARY_SHARE = 0.25
 #: How many times the gain of another passing catalogue entry an entry built on states'
 #: rates must have to be preferred to it. Giving way to any passing entry when it takes its
 #: shortest lag (an outside lag + `u^2` pair was named `unsteady-aero` alone that way) was
@@ -84,45 +73,10 @@ def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
             if not (e.rates and rival is not None and RATES_MARGIN * rival >= ev[e.name].mean)]
 
 
-#: An effect's verdict is a near tie when another candidate passing in the round that admitted
-#: it has at least this share of its held-out gain: which of the two it is, the data barely
-#: say. Chosen on the development half of `benchmarks/diagnosis_power.py` (its recorded
-#: first rounds; single effects, clean and out-of-catalogue cases): verdicts with a rival at
-#: 0.95 or more of their gain were wrong 13 times in 39, the others 22 times in 313 (at 0.9:
-#: 15 in 63; at 1.0: 10 in 20; the run recorded before the flag existed). It changes no
-#: verdict: it says which to doubt. The rival may be an entry built on rates that gave way
-#: (`RATES_MARGIN`), with a ratio above 1.
-TIE_SHARE = 0.95
-
-
-def tentative(first_gain: float, gain: float) -> bool:
-    """Is an effect named after the first (held-out `gain` in the round that admitted it) only
-    as large as what the first effect's form may leave (`SECONDARY_SHARE` of `first_gain`)?"""
-    return gain < SECONDARY_SHARE * first_gain
-
-
-def runner_up(chosen: str, passing: dict) -> dict | None:
-    """Of the candidates that passed a round (`passing`: name -> evidence with a `gain`),
-    the one other than `chosen` with the largest gain, as `{"effect", "gain_ratio"}` (its
-    gain over the chosen one's; 1 when that is not positive); `None` when none did."""
-    others = {k: ev for k, ev in passing.items() if k != chosen}
-    if not others:
-        return None
-    best = max(others, key=lambda k: others[k].gain)
-    gain = passing[chosen].gain
-    return {"effect": best, "gain_ratio": others[best].gain / gain if gain > 0 else 1.0}
-
-
-def near_tie(runner_up: dict | None) -> bool:
-    """Is an effect's `runner_up` (`{"effect", "gain_ratio"}` or `None`) a near tie
-    (`TIE_SHARE`)?"""
-    return runner_up is not None and runner_up["gain_ratio"] >= TIE_SHARE
-
-
 @dataclasses.dataclass
 class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
-    `rivals`: for each, its `runner_up` in the round that admitted it; `models`: the chosen model on each half;
+    `models`: the chosen model on each half;
     `rounds`: per round, its per-candidate level, every candidate's evidence and the effect
     it added (`None` for the round that stopped).
     Derived from them: `first`, every candidate's evidence in the first round (each against
@@ -131,7 +85,6 @@ class Selection:
     round."""
 
     chosen: list[tuple[Effect, Evidence]]
-    rivals: list[dict | None]
     models: list[Model]
     rounds: list[tuple[float, dict[str, Evidence], str | None]]
 
@@ -158,7 +111,7 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
                    max_effects: int = MAX_EFFECTS) -> Selection:
     models: list[Model] = [() for _ in halves]
     remaining = list(catalogue)
-    chosen, rivals, rounds = [], [], []
+    chosen, rounds = [], []
     while remaining and len(chosen) < max_effects:
         if chosen:
             remaining = [e for e in remaining if not e.rates]
@@ -173,7 +126,6 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
         rounds.append((lv, ev, best.name))
         chosen.append((best, ev[best.name]))
-        rivals.append(runner_up(best.name, {e.name: ev[e.name] for e in ok}))
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
-    return Selection(chosen, rivals, models, rounds)
+    return Selection(chosen, models, rounds)

@@ -141,15 +141,6 @@ def diagnosis_summary(d: Diagnosis) -> str:
     cs = confidence_set_line(d)
     if cs:
         lines.append(cs)
-    lead = (d.unexplained if d.verdict == "unexplained" else
-            d.effects[0] if d.effects and d.effects[0]["effect"] == d.verdict else None)
-    if lead is not None and lead.get("near_tie"):
-        ru = lead["runner_up"]
-        lines.append(f"  NEAR TIE: {ru['effect']} passed too, with "
-                     f"{100 * ru['gain_ratio']:.0f} % of the verdict's held-out gain"
-                     + (" (an entry built on states' rates gives way to a direct explanation "
-                        "with nearly its gain)" if ru["gain_ratio"] > 1 else "")
-                     + ": the data barely tell the two apart; read the verdict as one of the two")
     px = (d.disturbance or {}).get("proxy")
     if px:
         why = (f"left the residual red ({px['redness_after']:.1f})"
@@ -161,13 +152,10 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
                      f"{what}, so it is not named; the selection was run again without it)")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
-        lines.append(f"  and also{' (tentative)' if e.get('tentative') else ''}: {e['effect']}"
+        lines.append(f"  and also: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")
                      + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
-                     f"{'/'.join(e['affected'])}"
-                     + (f" (its held-out gain {100 * e['relative_gain']:.0f} % of the first's: "
-                        "possibly what the first effect's form leaves)"
-                        if e.get("tentative") else ""))
+                     f"{'/'.join(e['affected'])}")
     for e in (d.unexplained or {}).get("then", []) if not d.effects else []:
         # chosen (the table says so) but after the probe: not named, and why
         lines.append(f"  then, after the {d.unexplained['probe']} probe: {e['effect']}"
