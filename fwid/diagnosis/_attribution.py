@@ -185,10 +185,16 @@ class Engine:
 
     def best_variant(self, idx, model: Model, effect: Effect, sigma2: dict):
         """The variant of `effect` (added to `model`) with the least training error on units
-        `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's)."""
+        `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's); for
+        an effect whose variants differ in size (`Effect.sized`), the least
+        leave-one-unit-out error instead (with fewer than three units, the training error)."""
         if len(effect.variants) == 1:
             return effect.variants[0]
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
+        if effect.sized and len(idx) >= 3:
+            costs = [sum(self.loo_error(idx, ch, model + ((effect, v),)) / sigma2[ch]
+                         for ch in chans) for v in effect.variants]
+            return effect.variants[int(np.argmin(costs))]
         costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
                      for ch in chans) for v in effect.variants]
         return effect.variants[int(np.argmin(costs))]

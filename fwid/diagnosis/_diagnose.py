@@ -12,7 +12,7 @@ import numpy as np
 from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
-from ._catalogue import CATALOGUE, Effect
+from ._catalogue import CATALOGUE, Effect, quadratic_names
 from ._confidence import LEVEL, as_rows, confidence_set, explanations
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
@@ -107,12 +107,15 @@ class Diagnosis:
         }
 
 
-def _variant_text(v) -> str | None:
+def _variant_text(v, axis: str = "lon") -> str | None:
     v = unwrap(v)
     if v is None:
         return None
     if isinstance(v, float):  # a time constant or lead (0: at once)
         return f"{v:g} s" if v else "at once"
+    if all(isinstance(k, int) for k in v):  # a subset of nonlinear-aero's terms
+        names = quadratic_names(axis)
+        return "terms " + ", ".join(names[k] for k in v)
     kind, tau = v
     return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
 
@@ -318,7 +321,7 @@ def diagnose(
             res = test_residuals(model)
             now = rms_by_load([full(r) for r in res])
             affected = affected_loads(ev)
-            row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
+            row = {"effect": e.name, "variant": _variant_text(model[-1][1], axis),
                    "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
                    "shrink_pct": shrink(prev, now, affected),
                    "test_rms_before": prev, "test_rms_after": now}
@@ -392,7 +395,7 @@ def diagnose(
             "test_rms_after": rms_after,
             "affected": affected,
             "band": e.band,
-            "variant": _variant_text(variant),
+            "variant": _variant_text(variant, axis),
             "acts_on": list(variant.loads),
             "p": ev.p,
             "confidence": max(0.0, 1.0 - ev.p * alpha / level),

@@ -73,3 +73,37 @@ def test_clean_flights_leave_none_alone(effect_flights):
     d = fwid.diagnose(train, test, simulation=False)
     assert d.verdict == "none"
     assert [r["explanation"] for r in d.confidence_set][0] == []
+
+
+def _with_square(src, dst, load, state, frac):
+    """Copy a folder of flights, adding to `load` a single quadratic term in `state` of
+    `frac` times the load's spread."""
+    dst.mkdir(parents=True, exist_ok=True)
+    (dst / "vehicle.json").write_text((src / "vehicle.json").read_text())
+    for csv in sorted(src.glob("*.csv")):
+        header = csv.read_text().splitlines()[0]
+        names = header.split(",")
+        data = np.loadtxt(csv, delimiter=",", skiprows=1)
+        x = data[:, names.index(state)] - data[0, names.index(state)]
+        y = data[:, names.index(load)]
+        data[:, names.index(load)] += frac * np.std(y) * x * x / np.std(x * x)
+        np.savetxt(dst / csv.name, data, delimiter=",", header=header, comments="", fmt="%.12g")
+    return dst
+
+
+def test_nonlinear_aero_keeps_the_single_quadratic_term(effect_flights, tmp_path):
+    """A load with one quadratic term (`M += c w^2`): the family's size, chosen by
+    leave-one-flight-out error, is that term, not the whole group of nine; the EOM of the
+    simulation block gets that term only."""
+    from fwid.diagnosis._augment import augment
+
+    train, test = effect_flights("none", seed=2, n_train=4, n_test=4)
+    d = fwid.diagnose(fwid.load_flights(_with_square(train, tmp_path / "tr", "M", "w", 0.03)),
+                      fwid.load_flights(_with_square(test, tmp_path / "te", "M", "w", 0.03)),
+                      simulation=False)
+    assert d.verdict == "nonlinear-aero"
+    variant = d.effects[0]["variant"]
+    assert variant is not None and "ww" in variant.split("terms ")[1].split(", "), variant
+    model, _, _ = augment("lon", [("nonlinear-aero", (2,))])
+    assert {p for p in model.free if p.endswith("_ww")} == {"X_ww", "Z_ww", "M_ww"}
+    assert not any(p.endswith("_uu") or p.endswith("_wq") for p in model.free)
