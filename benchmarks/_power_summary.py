@@ -162,7 +162,7 @@ def _named(explanation: list[str]) -> frozenset[str]:
 def set_score(r: dict) -> dict | None:
     """How a case's confidence set (`confidence_set`: explanations, best first) scores:
     `covered` (single: an explanation names the injected effect and no other entry; pair: one
-    holds both), `decisive` (single: every explanation names the injected effect and no
+    holds both), `holds` (an explanation names the injected effects, maybe with others), `decisive` (single: every explanation names the injected effect and no
     other), `alarm` (clean, out of catalogue: an explanation names an entry) and `best` (the
     best explanation's first effect as a verdict: a probe is `unexplained`, none `none`).
     `None` without a set."""
@@ -177,6 +177,7 @@ def set_score(r: dict) -> dict | None:
     truth = frozenset(r["effect"].split("+")) if r["kind"] in ("single", "pair") else None
     return {"covered": truth is not None and (truth in named if r["kind"] == "single"
                                               else any(truth <= n for n in named)),
+            "holds": truth is not None and any(truth <= n for n in named),
             "decisive": r["kind"] == "single" and all(n == truth for n in named),
             "alarm": r["kind"] in ("clean", "out") and any(named),
             "best": best, "size": len(kept)}
@@ -189,8 +190,8 @@ def set_table(results) -> list[str]:
     rows = [(r, s) for r, s in rows if s is not None]
     if not rows:
         return ["(no confidence sets recorded)"]
-    out = ["| cases | n | coverage | decisive | verdict right | best explanation right | "
-           "mean set size |", "|---|---|---|---|---|---|---|"]
+    out = ["| cases | n | coverage | in an explanation | decisive | verdict right | "
+           "best explanation right | mean set size |", "|---|---|---|---|---|---|---|---|"]
 
     def line(label, sel):
         if not sel:
@@ -198,11 +199,12 @@ def set_table(results) -> list[str]:
         n = len(sel)
         cov = sum(s["covered"] for _, s in sel)
         dec = sum(s["decisive"] for _, s in sel)
+        holds = sum(s["holds"] for _, s in sel)
         ok = sum(bool(right(r)) for r, _ in sel)
         best = sum(s["best"] == r["effect"] for r, s in sel)
         size = sum(s["size"] for _, s in sel) / n
-        out.append(f"| {label} | {n} | {cov}/{n} | {dec}/{n} | {ok}/{n} | {best}/{n} | "
-                   f"{size:.1f} |")
+        out.append(f"| {label} | {n} | {cov}/{n} | {holds}/{n} | {dec}/{n} | {ok}/{n} | "
+                   f"{best}/{n} | {size:.1f} |")
 
     single = [(r, s) for r, s in rows if r["kind"] == "single"]
     for n in sorted({r["n"] for r, _ in single}):

@@ -364,8 +364,10 @@ def diagnose(
         if not effects:  # a probe first on the same residual tracks the disturbance too
             unexplained = None
     say("the confidence set of explanations (model confidence set over the held-out blocks)")
-    found = explanations(engine, halves, set_aside.first, tuple(catalogue) + tuple(probes),
-                         [e for e, _ in sel.chosen])
+    # an entry built on rates set aside as a proxy of a disturbance explains nothing here
+    pool = tuple(e for e in tuple(catalogue) + tuple(probes)
+                 if not (e.rates and "proxy" in disturbance))
+    found = explanations(engine, halves, set_aside.first, pool, [e for e, _ in sel.chosen])
     kept = as_rows(confidence_set(found), found[0])
     chosen = [e.name for e, _ in sel.chosen]
     last, levels = {**set_aside.last, **sel.last}, {**set_aside.level, **sel.level}

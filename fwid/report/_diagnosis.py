@@ -152,10 +152,14 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
                      f"{what}, so it is not named; the selection was run again without it)")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
+        without = [x for x in d.confidence_set if e["effect"] not in x["explanation"]]
         lines.append(f"  and also: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")
                      + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
-                     f"{'/'.join(e['affected'])}")
+                     f"{'/'.join(e['affected'])}"
+                     + (f" (the confidence set also keeps "
+                        f"{_explanation_text(without[0]['explanation'])} without it: these "
+                        "flights cannot tell whether it is there)" if without else ""))
     for e in (d.unexplained or {}).get("then", []) if not d.effects else []:
         # chosen (the table says so) but after the probe: not named, and why
         lines.append(f"  then, after the {d.unexplained['probe']} probe: {e['effect']}"

@@ -56,13 +56,15 @@ def test_the_set_is_scored_for_coverage_decisiveness_alarms_and_pairs():
                 "confidence_set": [{"explanation": list(x), "p_value": 1.0} for x in kept]}
 
     alone = rec("single", "nonlinear-aero", ["nonlinear-aero", "attitude"])
-    assert set_score(alone) == {"covered": True, "decisive": True, "alarm": False,
-                                     "best": "nonlinear-aero", "size": 1}  # a probe is no rival
+    assert set_score(alone) == {"covered": True, "holds": True, "decisive": True,
+                                "alarm": False, "best": "nonlinear-aero",
+                                "size": 1}  # a probe is no rival
     two = rec("single", "nonlinear-aero", ["unsteady-aero"], ["nonlinear-aero"])
     assert set_score(two)["covered"] and not set_score(two)["decisive"]
     assert set_score(two)["best"] == "unsteady-aero"
     missed = rec("single", "nonlinear-aero", ["nonlinear-aero", "time-offset"])
     assert not set_score(missed)["covered"]  # the truth alone is not an explanation kept
+    assert set_score(missed)["holds"]
     clean = rec("clean", "none", [], ["attitude"])
     assert not set_score(clean)["alarm"] and set_score(clean)["best"] == "none"
     alarm = rec("out", "turbulence", ["attitude"], ["unsteady-aero"], verdict="unexplained")
@@ -71,7 +73,7 @@ def test_the_set_is_scored_for_coverage_decisiveness_alarms_and_pairs():
                ["time-offset", "flap-coupling"])
     assert set_score(pair)["covered"]
     text = "\n".join(set_table([alone, two, missed, clean, alarm, pair]))
-    assert "| single, strength 1, 6+6 | 3 | 2/3 | 1/3 | 2/3 | 2/3 | 1.3 |" in text
+    assert "| single, strength 1, 6+6 | 3 | 2/3 | 3/3 | 1/3 | 2/3 | 2/3 | 1.3 |" in text
     assert "a kept explanation holds both effects in 1/1" in text
     assert "a catalogue name in the set of 1/2 clean and out-of-catalogue cases" in text
     assert set_score({"kind": "single", "effect": "x", "verdict": "x"}) is None
@@ -114,5 +116,11 @@ def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named(monkeypatch):
     assert "may only stand in, through the states' rates, for a disturbance or for what " \
         "flap-frequency explains directly" in text and "tracked the disturbance" not in text
     assert rec["disturbance"]["proxy"]["effect"] == "unsteady-aero", rec.get("disturbance")
-    assert rec["verdict"] == "flap-frequency" and rec["effects"] == ["flap-frequency"]
+    assert rec["verdict"] == "flap-frequency" and rec["effects"][0] == "flap-frequency"
+    # a further effect is one the set cannot do without, or the summary says it may not be there
+    kept = [x["explanation"] for x in rec["confidence_set"]]
+    for e in rec["effects"][1:]:
+        if any(e not in x for x in kept):
+            assert "without it: these flights cannot tell whether it is there" in text
     assert all("unsteady-aero" not in r["candidates"] for r in rec["rounds"])
+    assert all("unsteady-aero" not in x["explanation"] for x in rec["confidence_set"])

@@ -52,6 +52,8 @@ def test_gusts_are_a_random_disturbance(effect_flights, tmp_path):
         assert proxy["redness_after"] >= RED_MIN or proxy["shortest_lag"]
         assert "it tracked the disturbance" in diagnosis_summary(d)
         assert not d.candidate("unsteady-aero")["significant"]
+        # nor is it in the confidence set: it explained the disturbance, not a load
+        assert all("unsteady-aero" not in x["explanation"] for x in d.confidence_set)
         assert all("unsteady-aero" not in r["candidates"] for r in d.rounds)
         # each candidate's evidence is the second selection's (the last round it was tested
         # in), not the first's, which was conditioned on the proxy
