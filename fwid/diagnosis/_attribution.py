@@ -18,9 +18,9 @@ The loads of the axis that was not manoeuvred (the lateral ones in a longitudina
 take only the effects whose columns there carry the manoeuvre or belong to neither axis
 (`Effect.crosses_axes`: the coupling, the flapping modulated by every state, the flapping
 frequency, a drift; `Engine.allowed`). That axis's own states, attitude and control barely
-move, so columns built from them fit only what their noise hides from the baseline: an
-outside simulator's clean longitudinal flights were `unexplained` (the attitude probe on L,
-through the roll angle) and its real effects lost to that probe (2026-11-24, fifth session).
+move, so columns built from them fit only what their noise hides from the baseline (the
+attitude probe on L, through a roll angle that hardly moves, would make clean longitudinal
+flights `unexplained`).
 """
 
 from __future__ import annotations

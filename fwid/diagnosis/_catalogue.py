@@ -29,24 +29,11 @@ is the generic first term of its physical family.
   the effect (M through w and u, Z through q and u, ...). Those rates also carry what a gust
   does to the other loads, so when the residual stays red after it (`_disturbance.py`) it was
   a proxy of a disturbance: it is set aside and the selection runs again without it
-  (`random-disturbance` unless that names an effect). Lagging instead the
-  states simulated from the deflection by the flight's own linear model (`x' = A x + B d + c`
-  fitted by equation error, which carry no load) was tried on 2026-11-24 and not adopted: on
-  clean development flights those noise-free states predict what the measured states' noise
-  hides from the baseline (errors in the variables: 9 of 24 clean cases named
-  `unsteady-aero`), and tested given the model states themselves their lagging parts add
-  nothing (to first order in `tau` they are `-tau (A x + B d)`, in the span of the states and
-  the deflection: 0 of 12 strength-1 development `unsteady-aero` cases named). Nor was
-  projecting the lagged residuals of the loads a state's rate carries out of its column
-  (so that it could follow another effect): the lagged states of the loads' model carry
-  their own loads again, and on the development half it named `unsteady-aero` after 27 of
-  the first 153 cases' first effects, falsely. Making it a probe instead (its verdict
-  `unexplained`, as issue 12 counts an unsteady lag outside the catalogue) was measured on the
-  development half on 2026-11-24 (sixth session): false alarms 1 instead of 4 of 60, the other
-  six entries' single effects 259 instead of 260 of 288, pairs without it 24 instead of 25 of
-  30, the other effect of its pairs named 10 instead of 11 of 12, and the 28 of 48 true lags
-  it names lose their name. Not adopted: it would undo issue 16's entry, which is the
-  catalogue owner's call.
+  (`random-disturbance` unless that names an effect). The measured states are lagged, not
+  states simulated from the deflection by a linear model: such noise-free states predict
+  what the measured states' noise hides from the baseline (errors in the variables), and to
+  first order in `tau` their lagging parts `-tau (A x + B d)` lie in the span of the states
+  and the deflection, so they add nothing.
 - `time-offset`: the logged deflection is late against the states (a clock offset between the
   logs; `actuator-dynamics` covers the deflection acting *after* it is logged, which a
   time offset of the other sign cannot be told from): the deflection shifted earlier by a lead

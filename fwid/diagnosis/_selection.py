@@ -13,19 +13,11 @@ rate of one state carries the load it is reconstructed from (`w' = Z / m + ...`)
 entry also "explains" any effect on the other loads of the axis. It gives way to any other
 passing catalogue entry that achieves `1 / RATES_MARGIN` of its held-out gain (a real effect
 on the loads seen through the other loads' rates is explained less well by the rates than
-directly; `RATES_MARGIN` and `RATES_MIN_GAIN` were chosen on the development half of
-`benchmarks/diagnosis_power.py`), otherwise it competes with the rest on its gain; and it may enter only as the first effect (once another effect is in, it would
-pick up that effect's leftover misfit on the other loads and name a second effect that is
-not there). Letting it follow another effect when the attitude probe passes beside it (a real
-lag of the loads behind `u`, `w`, `v` carries the gravity term of their rates) was tried on
-2026-11-24: on the development half both effects of 29 instead of 24 of 42 pairs, for 8
-instead of 6 spurious further effects; on the held-out half 29 instead of 23 pairs, but 16
-spurious `unsteady-aero` names (11 of them not `tentative`) after effects whose held-out forms
-leave more misfit. Not adopted. Nor was letting it follow effects of the flapping band only
-(2026-11-24, fifth session: their misfit lies at the flapping harmonics, which the
-cycle-averaged rates should not carry): on the development half's 60 cases with
-`flap-coupling` it named `unsteady-aero` after 4 single `amplitude` forms at strength 2 and in
-neither of the 2 pairs it belongs to (the run was stopped after 49 cases).
+directly), otherwise it competes with the rest on its gain; and it may enter only as the
+first effect: once another effect is in, it picks up that effect's leftover misfit on the
+other loads and would name a second effect that is not there. The confidence set
+(`_confidence.py`) does not use these rules: it keeps a pair with the rates' entry when the
+held-out blocks cannot reject it, which is what the user is told.
 """
 
 from __future__ import annotations
@@ -38,25 +30,17 @@ from ._attribution import Engine, Model
 from ._catalogue import Effect
 from ._significance import Evidence, Half, evidence
 
-#: Family-wise false-alarm level per round: the 5 % the false alarms may cost (issue 12). It
-#: was 1 %, fixed before either half of `benchmarks/diagnosis_power.py` was run; replaying the
-#: development half's rounds (438 cases, current code) at 5 % names 285 instead of 279 of 336
-#: single effects and both effects of 25 instead of 24 of 42 pairs, with the same false
-#: alarms (2 of 60 clean and out-of-catalogue cases, both rivalries, not level-bound) and the
-#: same single spurious second effect. The test is conservative (a candidate that explains
-#: nothing only adds held-out error), so the level is an upper bound, not the rate.
+#: Family-wise false-alarm level per round: the 5 % the false alarms may cost. The test is
+#: conservative (a candidate that explains nothing only adds held-out error), so the level is
+#: an upper bound, not the rate (`benchmarks/results/diagnosis_power_*.md`: false alarms).
 ALPHA = 0.05
 #: Smallest typical relative drop of a block's held-out error that counts (2 %).
 MIN_GAIN = 0.02
 #: Most effects selected.
 MAX_EFFECTS = 3
 #: How many times the gain of another passing catalogue entry an entry built on states'
-#: rates must have to be preferred to it. Giving way to any passing entry when it takes its
-#: shortest lag (an outside lag + `u^2` pair was named `unsteady-aero` alone that way) was
-#: replayed on the recorded first rounds on 2026-11-24 (sixth session): on the development
-#: half 3 of 9 wrong verdicts at 0.01 s would turn right, none of the 2 right ones wrong; on the
-#: held-out records 4 right `incidence-lag` verdicts at strength 2 would turn wrong (gain ratios
-#: 1.3-4 on both sides). Not adopted.
+#: rates must have to be preferred to it (chosen on the development half of
+#: `benchmarks/diagnosis_power.py`).
 RATES_MARGIN = 1.2
 #: Smallest typical held-out gain of an entry built on states' rates (3 %): the rates of the
 #: other states carry a little of the load's own noise through the kinematic terms
