@@ -61,7 +61,7 @@ EXPORTS = {
         "initialize_distributed",
     ),
     "diagnosis": (
-        "CATALOGUE", "Diagnosis", "diagnose",
+        "CATALOGUE", "Diagnosis", "diagnose", "read_reconstruction",
     ),
     "validate": (
         "StateSpace", "eigenvalues", "state_space", "fit_metrics", "modes",
