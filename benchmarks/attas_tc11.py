@@ -21,7 +21,7 @@ import jax.numpy as jnp
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import fwid  # noqa: E402
-from attas_data import (  # noqa: E402
+from cases.attas import (  # noqa: E402
     TC3_BOOK_OEM_L0_CORRECTED,
     TC3_NAMES,
     TC3_THETA0,
@@ -31,6 +31,7 @@ from attas_data import (  # noqa: E402
     load_attas_tc3,
     load_attas_tc11,
 )
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 def short_period(x, u, p, c):
@@ -103,7 +104,7 @@ def main(argv=None):
             print(f"{k:<7}{v['value']:>12.5g}{v['std']:>10.2g}{v['book']:>12.5g}"
                   f"{v['rel_diff_pct']:>8.2f}")
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.json).write_text(_provenance.json_text(out, indent=2))
     print(f"\nwrote {args.json}")
 
 
