@@ -1,8 +1,9 @@
 """A confidence set of explanations: every model of the gap the held-out blocks cannot reject.
 
 The explanations are the baseline alone (`none`), each catalogue entry and probe alone, the
-pairs of the catalogue entries that gain most alone (`PAIR_POOL`), and the effects the forward
-selection chose together (`_selection.py`). Each is scored, as the selection's evidence is
+pairs of the catalogue entries that gain most alone (`PAIR_POOL`; ordered by that gain, an
+entry built on states' rates first or not at all, as in `_selection.py`), and the effects the
+forward selection chose together. The best explanation gives the verdict (its first effect). Each is scored, as the selection's evidence is
 (`_significance.py`), by the cross-fit: on every scoring block of about a second, the model
 fitted on the other flights gives, per band, the held-out sum of squares pooled over the loads
 (each scaled by the baseline's training mean square `s_l`), and the block's loss is
@@ -45,7 +46,7 @@ import numpy as np
 from ._attribution import Engine, Model
 from ._catalogue import Effect
 from ._selection import MIN_GAIN, RATES_MIN_GAIN
-from ._significance import Evidence, Half
+from ._significance import Evidence, Half, evidence
 
 #: Level of the set: an explanation is kept when its MCS p value is at least this.
 LEVEL = 0.10
@@ -154,7 +155,9 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
         out.append(Explanation((e,), _block_losses(engine, halves, models, cache)))
     gaining = sorted((e for e in candidates if not e.probe and first[e.name].mean > 0),
                      key=lambda e: -first[e.name].mean)[:pair_pool]
-    groups = [tuple(p) for p in itertools.combinations(gaining, 2)]
+    # an entry built on states' rates only first (`_selection.py`: after another effect it
+    # picks up that effect's leftover misfit on the other loads)
+    groups = [tuple(p) for p in itertools.combinations(gaining, 2) if not p[1].rates]
     if len(chosen) > 1 and tuple(chosen) not in groups:
         groups.append(tuple(chosen))
     for group in groups:
@@ -194,4 +197,18 @@ def as_rows(kept: Sequence[Explanation], base: Explanation) -> list[dict]:
         out.append({"explanation": x.names, "loss": loss,
                     "gain_pct": 100.0 * (1.0 - float(np.exp(loss))), "charge": x.charge,
                     "p_value": x.p_value})
+    return out
+
+
+def sequential(engine: Engine, halves: Sequence[Half], first: dict[str, Evidence],
+               effects: Sequence[Effect]) -> list[tuple[Effect, Evidence]]:
+    """The evidence of an explanation's `effects` as forward selection would have admitted
+    them in that order: the first's against the baseline (`first`), each further one's
+    added to those before it (`_significance.evidence`), for the rows of `diagnosis.json`."""
+    out: list[tuple[Effect, Evidence]] = []
+    models = [() for _ in halves]
+    for e in effects:
+        ev = first[e.name] if not out else evidence(engine, list(halves), models, e)
+        out.append((e, ev))
+        models = [m + ((e, v),) for m, v in zip(models, ev.variants)]
     return out

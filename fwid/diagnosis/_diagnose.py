@@ -4,16 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
 from ._catalogue import CATALOGUE, Effect, quadratic_names
-from ._confidence import LEVEL, as_rows, confidence_set, explanations
+from ._confidence import LEVEL, as_rows, confidence_set, explanations, sequential
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
@@ -22,7 +20,7 @@ from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
-from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
+from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
 
 
 @dataclasses.dataclass
@@ -120,28 +118,6 @@ def _variant_text(v, axis: str = "lon") -> str | None:
     return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
 
 
-def _check_excitation(sigs, axis: str) -> None:
-    d = AXIS_INPUT[axis]
-    moves = [np.ptp(s.slow[d]) for s in sigs]
-    if max(moves) < 1e-3:  # rad: a twentieth of a degree
-        raise ExcitationError(
-            f"too little excitation to diagnose the {axis} axis: '{d}' moves by at most "
-            f"{max(moves):.2g} rad in the training flights ({', '.join(s.name for s in sigs)}); "
-            "use flights with a manoeuvre (a 3211 or doublet on the control)"
-        )
-    o = AXIS_INPUT[other(axis)]
-    if all(o in s.slow for s in sigs):
-        theirs = np.median([np.std(s.slow[o]) for s in sigs])
-        ours = np.median([np.std(s.slow[d]) for s in sigs])
-        if theirs > 3.0 * ours:
-            warnings.warn(
-                f"the training flights look like {other(axis)} manoeuvres: '{o}' moves "
-                f"{theirs / max(ours, 1e-12):.0f} times more than '{d}' (median standard "
-                f"deviation), but the {axis} axis is diagnosed; pass axis='{other(axis)}' "
-                f"(CLI: --axis {other(axis)}) to diagnose the manoeuvre flown",
-                DiagnosisWarning, stacklevel=3)
-
-
 #: A load is affected by an effect when its held-out gain is at least this share of the
 #: largest gain over the loads.
 AFFECTED_SHARE = 0.25
@@ -221,8 +197,10 @@ def diagnose(
        the catalogue effects the disturbance hid (`random-disturbance` when it names none
        first: a probe would track the disturbance too).
 
-    `verdict` is the first effect selected, `"unexplained"`, `"random-disturbance"`, or
-    `"none"`. Each candidate carries its p value,
+    `verdict` is the first effect of the confidence set's best explanation (least held-out
+    loss, each effect charged its smallest gain; `effects` are its catalogue effects, a probe
+    first makes it `"unexplained"`; the selection's own model when they agree), then the
+    colour rules above: `"unexplained"`, `"random-disturbance"`, or `"none"`. Each candidate carries its p value,
     a `confidence` (one minus the p value corrected over the candidates in play) and the
     detection limit: the held-out error reduction the test would have seen with 80 % power.
 
@@ -253,7 +231,7 @@ def diagnose(
     say(f"decomposing {len(train)} training and {len(test)} test flights")
     tr_sig = [signals(f, cutoff=cutoff) for f in train]
     te_sig = [signals(f, cutoff=cutoff) for f in test]
-    _check_excitation(tr_sig, axis)
+    check_excitation(tr_sig, axis)
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
@@ -368,7 +346,24 @@ def diagnose(
     pool = tuple(e for e in tuple(catalogue) + tuple(probes)
                  if not (e.rates and "proxy" in disturbance))
     found = explanations(engine, halves, set_aside.first, pool, [e for e, _ in sel.chosen])
-    kept = as_rows(confidence_set(found), found[0])
+    best = confidence_set(found)
+    if [e.name for e in best[0].effects] != [e.name for e, _ in sel.chosen]:
+        # the verdict is the best explanation's: its effects as if selected in that order
+        sel = dataclasses.replace(sel, chosen=sequential(engine, halves, set_aside.first,
+                                                         best[0].effects))
+        effects, unexplained, in_sim = name_effects(sel)
+        if effects and effects[0].get("redness_after") is not None and rates_proxy(
+                effects[0], disturbance):  # as above: a proxy of a disturbance
+            disturbance["proxy"] = {k: effects[0][k] for k in (
+                "effect", "variant", "p", "shrink_pct", "redness_after", "shortest_lag")}
+            found = [x for x in found if not any(e.rates for e in x.effects)]
+            best = confidence_set(found)
+            sel = dataclasses.replace(sel, chosen=sequential(engine, halves, set_aside.first,
+                                                             best[0].effects))
+            effects, unexplained, in_sim = name_effects(sel)
+        if "proxy" in disturbance and not effects:  # a probe tracks the disturbance too
+            unexplained = None
+    kept = as_rows(best, found[0])
     chosen = [e.name for e, _ in sel.chosen]
     last, levels = {**set_aside.last, **sel.last}, {**set_aside.level, **sel.level}
     augmented: dict = {}
