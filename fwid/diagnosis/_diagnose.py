@@ -41,7 +41,9 @@ class Diagnosis:
     `gain_pct` and `blocks`, and the effect it `added`, `None` in the round that stopped; why
     a candidate was or was not added), and the held-out load residuals before (`residuals`)
     and after each candidate or probe (`augmented[name]`), by test flight and load, for
-    figures."""
+    figures; `confidence_set` (the explanations the held-out blocks cannot tell from the
+    best, best first, `_confidence.py`) and `states` (whether the states came from
+    `fwid reconstruct`, `_provenance.py`)."""
 
     axis: str
     train: list[str]
