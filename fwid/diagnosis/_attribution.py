@@ -205,14 +205,18 @@ class Engine:
         model fitted on the others, its local terms its own) it lowers. No threshold: a
         column set that only fits noise raises that error. Every load for an effect that
         replaces the deflection, or with fewer than three units. Only the loads it is
-        `allowed` on."""
+        `allowed` on. For an effect whose variants differ in size (`Effect.sized`) the whole
+        family (its first variant) decides the loads: its best subset, chosen by the same
+        leave-one-flight-out error, would beat the baseline on noise alone (the least of
+        many such errors is biased low)."""
         v = self.best_variant(idx, model, effect, sigma2)
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         every = OnLoads(v, tuple(ld for ld, _ in chans))
         if len(idx) < 3 or effect.replaces_input:
             return every
+        judge = OnLoads(effect.variants[0], every.loads) if effect.sized else every
         loads = tuple(ch[0] for ch in chans
-                      if self.loo_error(idx, ch, model + ((effect, every),))
+                      if self.loo_error(idx, ch, model + ((effect, judge),))
                       < self.loo_error(idx, ch, model))
         return OnLoads(v, loads)
 
