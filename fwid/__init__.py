@@ -43,6 +43,9 @@ EXPORTS = {
         "Flight", "Vehicle", "estimate_trim", "first_input_index", "load_flight", "load_flights",
         "load_vehicle",
     ),
+    "reconstruction": (
+        "read_raw", "reconstruct", "write_reconstruction",
+    ),
     "decomposition": (
         "Decomposition", "check_flapping_frequency", "cycle_averaged", "decompose",
         "estimate_flapping_frequency", "flapping_part", "flapping_phase", "highpass", "lowpass",
@@ -58,7 +61,7 @@ EXPORTS = {
     "estimate": (
         "RelaxedGaussNewton", "FitResult", "fit", "fit_each", "least_squares_start",
         "fit_shooting", "fit_filter_error", "FilterErrorResult", "steady_state_gain",
-        "initialize_distributed",
+        "initialize_distributed", "prior_from", "prior_information",
     ),
     "diagnosis": (
         "CATALOGUE", "Diagnosis", "diagnose", "read_reconstruction",
@@ -70,6 +73,9 @@ EXPORTS = {
         "cutoff_cost", "eigenvalue_sensitivity", "estimate_sensitivity_to_cutoff",
         "metric_sensitivity", "output_sensitivity", "rank_sensitivities",
     ),
+    "design": (
+        "Design", "Discrimination", "design_discriminating", "design_input",
+    ),
     "identification": (
         "CombinedIdentification", "FlappingIdentification", "FlightFit", "Identification",
         "JointComparison", "SteadyVsManoeuvre", "compare_joint", "evaluate", "identify",
@@ -78,7 +84,7 @@ EXPORTS = {
     "report": (
         "harmonic_amplitudes", "plot_steady_vs_manoeuvre", "plot_superposition",
         "plot_time_and_spectrum", "identification_report", "plot_decomposition",
-        "plot_flight_fit", "plot_poles", "write_json",
+        "plot_flight_fit", "plot_poles", "plot_reconstruction", "write_json",
     ),
 }
 _STAGE = {name: stage for stage, names in EXPORTS.items() for name in names}

@@ -63,6 +63,22 @@ def parser() -> argparse.ArgumentParser:
                    "lon_0.csv, ...), so that sets written by separate calls never collide")
     s.add_argument("--duration", type=float, default=4.5, help="seconds per flight")
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
+    r = s.add_argument_group("raw recordings (CONTRACTS section 5; the 6-DOF nonlinear flight)")
+    r.add_argument("--raw", nargs="?", const="fwid", choices=("fwid", "motive"), default=None,
+                   help="write raw recordings instead of flights: the fwid raw CSV (NED), or a "
+                        "Motive CSV export (y-up mm, a second rigid body) with the autopilot log "
+                        "NAME.onboard.csv; the truth goes to OUT_DIR/truth/")
+    r.add_argument("--rate", type=float, default=None, help="tracking frame rate [Hz] (200)")
+    r.add_argument("--position-noise", type=float, default=None,
+                   help="tracking position noise, 1 sigma per axis [mm] (0.4)")
+    r.add_argument("--attitude-noise", type=float, default=None,
+                   help="tracking attitude noise, 1 sigma per axis [deg] (0.15)")
+    r.add_argument("--dropouts", type=float, default=None,
+                   help="share of frames where tracking lost the body (0.005)")
+    r.add_argument("--onboard-rate", type=float, default=None,
+                   help="autopilot log rate [Hz] (512; motive form)")
+    r.add_argument("--clock-offset", type=float, default=None,
+                   help="t_tracking - t_onboard [s] (random in +-200 s; motive form)")
 
     tp = sub.add_parser("template", help="write an example flight folder to overwrite with "
                         "your own data (columns, units, vehicle.json explained in README.txt)",
@@ -89,7 +105,39 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: one overview of all flights' fits (the worst and best few "
                    "when many) and the poles (summary), plus one figure per flight (all), or "
                    "none; flap/combined: their figures (summary, all) or none")
+    i.add_argument("--prior", default=None, metavar="PRIOR.json",
+                   help="lon/lat: a Gaussian prior on parameters, {\"Mq\": {\"mean\": .., "
+                   "\"std\": ..}, ..}, or an earlier report.json (its parameters and std): "
+                   "the fit is the maximum a posteriori estimate")
+    i.add_argument("--bounds", default=None, metavar="BOUNDS.json",
+                   help="lon/lat: parameter bounds, {\"Mq\": {\"low\": .., \"high\": ..}, ..} "
+                   "(null or a missing key: open), kept by a bounded Gauss-Newton step")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
+
+    rc = sub.add_parser("reconstruct", help="raw tracking takes and autopilot logs to flights: "
+                        "smoothed states and loads (CONTRACTS section 5)", formatter_class=fmt)
+    rc.add_argument("raw", nargs="+", metavar="RAW",
+                    help="raw takes: fwid raw CSVs or Motive CSV exports, or folders of them "
+                    "(their top-level *.csv, not *.onboard.csv)")
+    rc.add_argument("--out", required=True, help="folder for the flights, vehicle.json, "
+                    "reconstruction.json and one figure per take")
+    rc.add_argument("--body", default=None, help="the Motive rigid body's name (needed when the "
+                    "take holds several)")
+    rc.add_argument("--frame", choices=("ned", "y-up", "z-up"), default=None,
+                    help="the recording's world frame, body axes alike (default: ned for the "
+                    "fwid raw CSV, y-up for Motive)")
+    rc.add_argument("--onboard", default=None, metavar="LOG.csv",
+                    help="the autopilot log of a single Motive take (default: NAME.onboard.csv "
+                    "beside it)")
+    rc.add_argument("--clock-offset", type=float, default=None, metavar="S",
+                    help="t_tracking = t_onboard + S, instead of finding it from the gyro")
+    rc.add_argument("--max-dropout", type=float, default=0.1, metavar="S",
+                    help="longest tracking gap bridged (s); a longer one is an error")
+    rc.add_argument("--min-overlap", type=float, default=2.0, metavar="S",
+                    help="shortest overlap of take and autopilot log accepted (s)")
+    rc.add_argument("--no-figures", dest="figures", action="store_false",
+                    help="skip the figure per take")
+    rc.add_argument("--quiet", action="store_true", help="no progress lines")
 
     d = sub.add_parser("diagnose", help="where the model misses, which effect explains it, "
                                         "how far the held-out error shrinks once it is added",
@@ -108,4 +156,37 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--out", default=None,
                    help="folder for diagnosis.json and the figure (without it nothing is written)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")
+
+    g = sub.add_parser("design", help="design the control input of the next flight through "
+                                      "the identified model (D-optimal)", formatter_class=fmt)
+    g.add_argument("--model", choices=("lon", "lat"), default=None,
+                   help="the model of the report: elevator (lon) or rudder (lat) input")
+    g.add_argument("--from", dest="source", default=None, metavar="REPORT.json",
+                   help="report.json of `fwid identify --model lon|lat`")
+    g.add_argument("--duration", type=float, default=5.0, help="input length [s]")
+    g.add_argument("--amplitude", type=float, required=True,
+                   help="peak deflection [rad], perturbation from trim")
+    g.add_argument("--quiet", type=float, default=1.0,
+                   help="zero input for the first QUIET seconds (the trim estimate)")
+    g.add_argument("--out", required=True, help="folder for input.csv, design.json, design.png")
+    g.add_argument("--parametrisation", choices=("steps", "multisine"), default="steps",
+                   help="free piecewise-constant sequence or multisine (free amplitudes and "
+                        "phases)")
+    g.add_argument("--switch-rate", type=float, default=10.0,
+                   help="steps: switching rate [Hz]")
+    g.add_argument("--rate", type=float, default=100.0, help="input sample rate [Hz]")
+    g.add_argument("--attitude-limit", type=float, default=None,
+                   help="bound on the predicted attitude excursion [rad] (80%% of it used); "
+                        "default: the excursion of a 3211 of the same amplitude and length")
+    g.add_argument("--restarts", type=int, default=4, help="random restarts")
+    g.add_argument("--seed", type=int, default=0, help="random seed of the restarts")
+    g.add_argument("--no-progress", dest="quiet_progress", action="store_true",
+                   help="no progress lines")
+    g.add_argument("--discriminate", default=None, metavar="DIAGNOSIS_DIR",
+                   help="instead: the input telling apart the two closest effects of the "
+                        "diagnosis in DIAGNOSIS_DIR (diagnosis.json), both models re-fitted on "
+                        "its training flights")
+    g.add_argument("--train", nargs="+", default=None, metavar="DATA",
+                   help="with --discriminate: the diagnosis's training flights (default: the "
+                        "paths its diagnosis.json records)")
     return p

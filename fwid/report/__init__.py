@@ -9,7 +9,8 @@
   (`_table.py`); `joint_summary` (`_joint.py`); `diagnosis_summary` (`_diagnosis.py`).
 - Figures (object-oriented matplotlib): fits and poles (`_figures.py`, Figures 6-11), a batch's
   fits in one figure (`_overview.py`, `plot_fits_overview`), the
-  decomposition (`_decomposition_plot.py`, Figure 4), time and spectrum (`_spectra.py`,
+  decomposition (`_decomposition_plot.py`, Figure 4), a reconstructed take
+  (`_reconstruction.py`, `plot_reconstruction`), time and spectrum (`_spectra.py`,
   Figures 12-17), the gap map (`_diagnosis.py`).
 
 Submodules are imported on first use of one of their names (PEP 562): `fwid identify` does
@@ -43,6 +44,9 @@ EXPORTS = {
     ),
     "_json": (
         "parameters_csv", "write_json", "write_text",
+    ),
+    "_reconstruction": (
+        "plot_reconstruction",
     ),
     "_spectra": (
         "amplitude_spectrum", "harmonic_amplitudes", "peak_table", "plot_steady_vs_manoeuvre",

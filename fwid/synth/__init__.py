@@ -9,6 +9,11 @@ a family of forms (`form`, `FORMS`; equations in `fwid.synth._effects`), or two 
 `effect_noise_ratio` measures how strong it is against the noise on its loads, and
 `random_vehicle` draws a stable DelFly with every derivative and Fourier coefficient within
 +-30 % of the paper's.
+
+Raw recordings (CONTRACTS section 5): `_sixdof` flies the same vehicle and loads with the
+full nonlinear rigid-body equations (JAX, diffrax); `_raw` records such a flight as a lab
+would (tracking take with pose noise and dropouts, autopilot log on its own clock with a
+biased gyro); `_rawfiles` writes it as a fwid raw CSV or a Motive export plus the truth.
 """
 
 from ._delfly import (
@@ -55,6 +60,28 @@ from ._simulate import (
     simulate_flight as simulate_flight,
 )
 from ._strength import effect_noise_ratio as effect_noise_ratio
+from ._raw import ONBOARD as ONBOARD, RAW_AMPLITUDE as RAW_AMPLITUDE, TRACKING as TRACKING, simulate_raw as simulate_raw
+from ._rawfiles import (
+    RAW_COLUMNS as RAW_COLUMNS,
+    RAW_FORMS as RAW_FORMS,
+    Y_UP as Y_UP,
+    ned_to_y_up as ned_to_y_up,
+    write_fwid_raw as write_fwid_raw,
+    write_motive as write_motive,
+    write_onboard as write_onboard,
+    write_raw_flights as write_raw_flights,
+    write_truth as write_truth,
+)
+from ._sixdof import (
+    SIXDOF_STATES as SIXDOF_STATES,
+    SixDof as SixDof,
+    euler_to_quat as euler_to_quat,
+    initial_state as initial_state,
+    integrate as integrate_sixdof,
+    quat_to_euler as quat_to_euler,
+    quat_to_matrix as quat_to_matrix,
+    sixdof_model as sixdof_model,
+)
 from ._vehicles import RANDOM_PARAMS as RANDOM_PARAMS, random_vehicle as random_vehicle
 from ._write import (
     INPUT_CYCLE as INPUT_CYCLE,

@@ -1,6 +1,7 @@
 """The command line per CONTRACTS section 2: exit codes, messages, report.json."""
 
 import json
+from pathlib import Path
 import subprocess
 import sys
 
@@ -167,6 +168,9 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
     assert (out / "gap_map.png").stat().st_size > 10_000
     assert rep["simulation"] is None and not (out / "gap_sim.png").exists()
     assert rep["process_noise"] is None  # (only with a random-disturbance verdict)
+    # where the flights are (for `fwid design --discriminate`), beside their names
+    assert [Path(p).name for p in rep["method"]["train_paths"]] == rep["train"]
+    assert all(Path(p).is_file() for p in rep["method"]["train_paths"] + rep["method"]["test_paths"])
     # bad input: exit 2, one line, the earlier report untouched
     before = (out / "diagnosis.json").read_text()
     (tmp_path / "bad").mkdir()

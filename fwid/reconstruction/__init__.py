@@ -1,0 +1,52 @@
+"""From what a lab records to flight data (CONTRACTS section 5): raw tracking takes and
+autopilot logs to the section-1 flights every other stage reads.
+
+- Reading (numpy, no JAX): the form is told by the first line (`_read.py`, [`fwid.read_raw`][]):
+  the fwid raw CSV (`_fwid_raw.py`) and the OptiTrack Motive CSV export with its autopilot
+  log `NAME.onboard.csv` (`_motive.py`); the checks they share (uniform time base, unit
+  quaternions, dropouts no longer than `max_dropout`) and the `RawTake` (`_raw.py`);
+  rotations, quaternion sign continuity, y-up / z-up to north-east-down (`_rotations.py`).
+- Smoothing (JAX): a linear Kalman filter and Rauch-Tung-Striebel smoother with
+  `lax.scan` (`_kalman.py`) on a kinematic model per axis, white jerk plus the flapping
+  harmonics 1-3 with wandering coefficients and a gyro bias (`_model.py`), noise levels by
+  maximum likelihood, vmapped over takes of one length (`_smoother.py`); the attitude as an
+  iterated error-state smoother on SO(3) (`_attitude.py`).
+- The autopilot's clock against the tracking clock, and its signals resampled onto the
+  take's time base without aliasing (`_clock.py`).
+- States and loads from the full nonlinear rigid-body equations (`_loads.py`); the frame
+  check and residuals (`_checks.py`); the pipeline, [`fwid.reconstruct`][] (`_pipeline.py`);
+  writing the flights and `reconstruction.json` atomically (`_write.py`).
+
+`reconstruction.json` holds `{"flights": [entry, ..]}`, one entry per flight:
+
+- `flight`, `source`, `clock_offset_s` (`t_tracking = t_onboard + clock_offset_s`; 0 when one
+  file holds both), `dropouts` (`[start, end]` times of the samples lost), `warnings`
+  (CONTRACTS section 5);
+- `rate_hz`, `duration_s`: the flight's time base;
+- `clock`: the offset's quality, or null without a log: `offset_s`, `std_s` (its standard
+  error from the curvature of the fit), `corr` (correlation of the aligned gyro and
+  smoothed rates), `rms_rad_s` (their residual, bias removed), `given` (from `--clock-offset`);
+- `noise`: the measurement noise found by maximum likelihood: `position_m`, `attitude_rad`
+  (per body axis), `gyro_rad_s` (per axis, or null);
+- `smoother`: the chosen cut-off of the slow part (`position_cutoff_hz`, `attitude_cutoff_hz`)
+  and tracking bandwidth of the flapping coefficients (`..._harmonic_bandwidth_hz`);
+- `gyro_bias_rad_s`: the gyro's estimated bias (per axis, or null);
+- `residuals`: recorded minus smoothed, rms: `position_rms_m`, `attitude_rms_rad` (per
+  axis), `gyro_rms_rad_s` (gyro less bias minus smoothed rates, per axis, or null); about the
+  noise levels when the smoother and the data agree;
+- `specific_force_body_mean`: the mean aerodynamic force per unit mass in body axes (m/s^2),
+  what the frame check judges.
+"""
+
+from ._pipeline import (
+    ReconstructedFlight as ReconstructedFlight,
+    Reconstruction as Reconstruction,
+    reconstruct as reconstruct,
+)
+from ._raw import OnboardLog as OnboardLog, RawTake as RawTake
+from ._read import raw_files as raw_files, read_raw as read_raw
+from ._write import write_reconstruction as write_reconstruction
+from ._loads import rigid_body_loads as rigid_body_loads
+
+__all__ = ["OnboardLog", "RawTake", "ReconstructedFlight", "Reconstruction", "raw_files",
+           "read_raw", "reconstruct", "rigid_body_loads", "write_reconstruction"]

@@ -1,0 +1,284 @@
+"""From raw takes to section-1 flights: read, align the clocks, smooth, rebuild the loads.
+
+Takes of one length are smoothed together (vmapped); a take that fails is reported and
+left out while the others go on.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from .._errors import FlightDataError, FwidError, InputError
+from ..data._sidefiles import VEHICLE_FILE, read_vehicle
+from ._attitude import smooth_attitude
+from ._checks import check_frame, residuals
+from ._clock import MIN_OVERLAP, find_offset, resample
+from ._loads import body_states, rigid_body_loads
+from ._model import phase_of
+from ._raw import MAX_DROPOUT, RawTake
+from ._read import raw_files, read_raw
+from ._smoother import smooth_batch
+
+#: The section-1 columns written, in order (extras follow).
+COLUMNS = ("t", "u", "v", "w", "p", "q", "r", "phi", "theta", "psi", "de", "dr", "f",
+           "X", "Y", "Z", "L", "M", "N")
+
+
+class ReconstructedFlight(NamedTuple):
+    """One reconstructed take: `columns` (section 1 plus extras: `x y z` the smoothed
+    position, `tracked`, the gyro `p_gyro q_gyro r_gyro` when there is one), its
+    `reconstruction.json` entry, the `vehicle` used and what the figure shows (`raw`: the
+    take as recorded, cut to the flight's time base)."""
+
+    name: str
+    columns: dict[str, np.ndarray]
+    entry: dict
+    vehicle: dict
+    vehicle_path: str
+    raw: dict[str, np.ndarray]
+
+
+class Reconstruction(NamedTuple):
+    """What [`fwid.reconstruct`][] made: the flights (in input order) and the takes that
+    failed, as `(path, one-line message)`."""
+
+    flights: list[ReconstructedFlight]
+    failures: list[tuple[str, str]]
+
+
+def _groups(items, key):
+    out = defaultdict(list)
+    for i, it in enumerate(items):
+        out[key(it)].append(i)
+    return out.values()
+
+
+def _stack(xs):
+    return np.stack(xs)
+
+
+def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, params=None,
+              passes=None):
+    """Smooth the attitude of several takes, vmapped by length (`passes`: per take)."""
+    out = [None] * len(takes)
+    key = (lambda i: (len(tracked[i]), round(takes[i].dt, 12), None if passes is None
+                      else passes[i]))
+    for idx in _groups(range(len(takes)), key):
+        dt = takes[idx[0]].dt
+        ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
+        kw = {}
+        if gyros is not None:
+            kw = {"gyro": _stack([gyros[i] for i in idx]), "gyro_mask": _stack([gmasks[i] for i in idx])}
+        if starts is not None:
+            kw["start"] = _stack([starts[i] for i in idx])
+        if params is not None:
+            kw["params"] = [p for i in idx for p in params[i]]
+        if passes is not None:
+            kw["passes"] = passes[idx[0]]
+        att = smooth_attitude(_stack([quats[i] for i in idx]), _stack([tracked[i] for i in idx]),
+                              _stack(ph), _stack(om), dt, **kw)
+        for j, i in enumerate(idx):
+            out[i] = type(att)(*(None if v is None else (v[3 * j:3 * j + 3] if k == "params" else v[j])
+                                 for k, v in att._asdict().items()))
+    return out
+
+
+def _translation(takes, pos, tracked, fs):
+    out = [None] * len(takes)
+    for idx in _groups(range(len(takes)), lambda i: (len(tracked[i]), round(takes[i].dt, 12))):
+        dt = takes[idx[0]].dt
+        ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
+        sm = smooth_batch(_stack([pos[i] for i in idx]), _stack([tracked[i] for i in idx]),
+                          _stack(ph), _stack(om), dt, scale=1e-6)
+        for j, i in enumerate(idx):
+            out[i] = type(sm)(*(v[j] if isinstance(v, np.ndarray) else v for v in sm))
+    return out
+
+
+def _vehicle(path: Path, vehicle):
+    if vehicle is not None:
+        return (dict(vehicle), "") if isinstance(vehicle, dict) else (read_vehicle(vehicle), str(vehicle))
+    v = path.parent / VEHICLE_FILE
+    if not v.is_file():
+        raise FlightDataError(f"{path}: no {VEHICLE_FILE} beside the take; the loads need the "
+                              "vehicle's mass and inertia (CONTRACTS section 1)")
+    return read_vehicle(v), str(v)
+
+
+def _cut(take: RawTake, clock, min_overlap):
+    """The take's samples covered by its log at the clock offset, and the log there."""
+    log = take.onboard
+    lo, hi = log.t[0] + clock.offset, log.t[-1] + clock.offset
+    keep = (take.t >= lo - 1e-9) & (take.t <= hi + 1e-9) & np.isfinite(take.t)
+    idx = np.flatnonzero(keep)
+    if idx.size == 0 or (take.t[idx[-1]] - take.t[idx[0]]) < min_overlap:
+        n = 0.0 if idx.size == 0 else take.t[idx[-1]] - take.t[idx[0]]
+        raise FlightDataError(
+            f"{take.path}: take and autopilot log {log.path} overlap for {n:.3g} s only at "
+            f"the clock offset {clock.offset:.6g} s (at least {min_overlap:g} s needed); give "
+            "the log of this take, or the right --clock-offset")
+    s = slice(int(idx[0]), int(idx[-1]) + 1)
+    cols = {k: resample(log.t, v, take.t[s] - clock.offset) for k, v in log.columns.items()}
+    # the spline may leave the first/last sample NaN by round-off: hold the nearest value
+    for k, v in cols.items():
+        good = np.flatnonzero(np.isfinite(v))
+        cols[k] = np.interp(np.arange(len(v)), good, v[good])
+    return s, cols
+
+
+def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onboard=None,
+                clock_offset: float | None = None, max_dropout: float = MAX_DROPOUT,
+                min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None) -> Reconstruction:
+    """Raw takes to section-1 flights (CONTRACTS section 5), smoothed and with their loads.
+
+    The states come from the smoother, the loads from the full nonlinear rigid-body
+    equations; a take that fails is reported and the others go on.
+
+    **Arguments:**
+    - `paths`: raw takes (files, or folders of them): fwid raw CSVs or Motive CSV exports;
+    - `body`, `frame`, `onboard`, `max_dropout`: as [`fwid.read_raw`][];
+    - `clock_offset`: `t_tracking = t_onboard + clock_offset` (s) for Motive takes, instead
+      of finding it from the gyro;
+    - `min_overlap`: the shortest overlap (s) of take and log accepted;
+    - `vehicle`: a `vehicle.json` path or its dict (default: the one beside each take);
+    - `progress`: called with a one-line message per take.
+
+    **Returns:** a `fwid.reconstruction.Reconstruction`: `flights` (each a
+    `ReconstructedFlight`: `columns`, `entry` of `reconstruction.json`, ...) and `failures`
+    (`(path, one-line message)`).
+    """
+    files = raw_files(paths)
+    if onboard is not None and len(files) > 1:
+        raise InputError(f"--onboard names the log of one take, but {len(files)} takes were given")
+    say = progress or (lambda msg: None)
+    failures, ok = {}, []
+    for f in files:
+        try:
+            take = read_raw(f, body=body, frame=frame, onboard=onboard, max_dropout=max_dropout)
+            ok.append((f, take, *_vehicle(f, vehicle)))
+        except FwidError as e:
+            failures[str(f)] = str(e)
+            say(f"{f.name}: failed (below)")
+    # 1. attitude without the gyro (the final one for a fwid raw CSV); the clock from it
+    takes = [t for _, t, _, _ in ok]
+    fs = [t.controls["f"] if t.controls is not None else
+          np.full(len(t.t), np.median(t.onboard.columns["f"])) for t in takes]
+    # one pass where the gyro's pass follows (it starts from this one's attitude), else two
+    att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
+                     passes=[1 if t.onboard is not None else 2 for t in takes])
+    flights, stage = [None] * len(ok), []
+    for i, (f, take, veh, vpath) in enumerate(ok):
+        try:
+            if take.onboard is None:
+                stage.append((i, slice(None), dict(take.controls), None, att0[i]))
+                continue
+            log = take.onboard
+            gyro = np.stack([log.columns[c] for c in "pqr"], 1)
+            clock = find_offset(take.t, att0[i].w, log.t, gyro, float(np.median(log.columns["f"])),
+                                given=clock_offset, min_overlap=min_overlap)
+            if clock is None:
+                at = ("any clock offset" if clock_offset is None
+                      else f"the clock offset {clock_offset:g} s given")
+                raise FlightDataError(
+                    f"{take.path}: take and autopilot log {log.path} overlap by less than "
+                    f"{min_overlap:g} s at {at}; give the log of this take"
+                    + ("" if clock_offset is None else " or the right --clock-offset"))
+            s, cols = _cut(take, clock, min_overlap)
+            stage.append((i, s, cols, clock, att0[i]))
+        except FwidError as e:
+            failures[str(f)] = str(e)
+            say(f"{f.name}: failed (below)")
+    # 2. attitude with the gyro, about the first pass's attitude; translation
+    with_gyro = [st for st in stage if st[3] is not None]
+    att1 = _attitude([ok[i][1] for i, *_ in with_gyro],
+                     [ok[i][1].quat[s] for i, s, *_ in with_gyro],
+                     [ok[i][1].tracked[s] for i, s, *_ in with_gyro],
+                     [c["f"] for _, _, c, _, _ in with_gyro],
+                     gyros=[np.stack([c[k] for k in "pqr"], 1) for _, _, c, _, _ in with_gyro],
+                     gmasks=[np.ones(len(c["f"]), bool) for _, _, c, _, _ in with_gyro],
+                     starts=[a.R[s] for _, s, _, _, a in with_gyro],
+                     params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
+    final_att = {st[0]: a for st, a in zip(with_gyro, att1)}
+    trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
+                         [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage])
+    for (i, s, cols, clock, a0), tr in zip(stage, trans):
+        f, take, veh, vpath = ok[i]
+        try:
+            att = final_att.get(i, a0)
+            flights[i] = _assemble(take, s, cols, clock, att, tr, veh, vpath)
+            e = flights[i].entry
+            off = f", clock offset {e['clock_offset_s']:.4f} s" if clock is not None else ""
+            say(f"{take.name}: {len(flights[i].columns['t'])} samples at {e['rate_hz']:.4g} Hz"
+                f"{off}, {len(e['dropouts'])} dropouts")
+        except FwidError as e:
+            failures[str(f)] = str(e)
+            say(f"{f.name}: failed (below)")
+    order = {str(f): k for k, f in enumerate(files)}
+    fails = sorted(failures.items(), key=lambda kv: order.get(kv[0], 0))
+    return Reconstruction([fl for fl in flights if fl is not None], fails)
+
+
+def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> ReconstructedFlight:
+    t = take.t[s]
+    V, dV, eul = body_states(att.R, tr.vel, tr.acc, att.w)
+    XYZ, LMN = rigid_body_loads(V, dV, att.w, att.a, att.R, veh)
+    check_frame(XYZ / veh["mass"], veh["g"], take)
+    out = {"t": t}
+    for k, v in zip(("u", "v", "w"), V.T):
+        out[k] = v
+    for k, v in zip(("p", "q", "r"), att.w.T):
+        out[k] = v
+    for k, v in zip(("phi", "theta", "psi"), eul.T):
+        out[k] = v
+    for k in ("de", "dr", "f"):
+        out[k] = cols[k]
+    for k, v in zip(("X", "Y", "Z", "L", "M", "N"), np.concatenate([XYZ, LMN], 1).T):
+        out[k] = v
+    for k, v in zip(("x", "y", "z"), tr.pos.T):
+        out[k] = v
+    tracked = take.tracked[s]
+    out["tracked"] = tracked.astype(float)
+    gyro = None
+    if clock is not None:
+        gyro = np.stack([cols[k] for k in "pqr"], 1)
+        for k in "pqr":
+            out[f"{k}_gyro"] = cols[k]
+    for k, v in cols.items():
+        if k not in out and k not in ("p", "q", "r"):
+            out[k] = v
+    lo, hi = t[0], t[-1]
+    gaps = [g for g in take.dropouts if g[1] >= lo and g[0] <= hi]
+    res = residuals(take.pos[s], take.quat[s], tracked, tr.pos, att.R, att.w, gyro, att.bias)
+    warnings = list(take.warnings)
+    entry = {
+        "flight": f"{take.name}.csv", "source": f"{take.source}: {Path(take.path).name}",
+        "clock_offset_s": 0.0 if clock is None else clock.offset,
+        "dropouts": gaps, "warnings": warnings,
+        "rate_hz": 1.0 / take.dt, "duration_s": float(t[-1] - t[0]),
+        "clock": None if clock is None else {
+            "offset_s": clock.offset, "std_s": clock.std, "corr": clock.corr,
+            "rms_rad_s": clock.rms, "given": clock.given},
+        "noise": {"position_m": float(tr.sigma), "attitude_rad": list(att.sigma),
+                  "gyro_rad_s": None if att.sigma_gyro is None else list(att.sigma_gyro)},
+        "smoother": {"position_cutoff_hz": float(tr.cutoff),
+                     "position_harmonic_bandwidth_hz": float(tr.coeff_bandwidth),
+                     "attitude_cutoff_hz": list(att.cutoff),
+                     "attitude_harmonic_bandwidth_hz": list(att.coeff_bandwidth)},
+        "gyro_bias_rad_s": None if att.bias is None else list(att.bias),
+        "residuals": res,
+        "specific_force_body_mean": list(np.mean(XYZ, 0) / veh["mass"]),
+    }
+    if clock is not None and not clock.given and clock.corr < 0.5:
+        warnings.append(f"the clock offset is poorly determined (gyro and smoothed rates "
+                        f"correlate at {clock.corr:.2f}); check the log, or give --clock-offset")
+    if res["position_rms_m"] > 3 * tr.sigma or max(res["attitude_rms_rad"]) > 3 * max(att.sigma):
+        warnings.append("the smoothed motion departs from the recorded by more than 3 noise "
+                        "levels; check the take for glitches")
+    raw = {"t": t, "pos": take.pos[s], "quat": take.quat[s], "tracked": tracked}
+    if gyro is not None:
+        raw["gyro"] = gyro
+    return ReconstructedFlight(take.name, out, entry, veh, vpath, raw)

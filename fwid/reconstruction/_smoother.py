@@ -1,0 +1,181 @@
+"""Noise levels by maximum likelihood, then the Rauch-Tung-Striebel smoother, for a batch
+of independent problems of one length (vmapped: takes, or takes x attitude axes).
+
+The noise levels come from the data: the smoother's cut-off `f_c` of the slow part, the
+bandwidth `f_h` of the flapping coefficients and (with a gyro) the gyro's noise relative to
+the attitude's are chosen on a grid (`_model.CUTOFFS`, ...) by the innovations'
+log-likelihood, with the overall noise scale concentrated out (it is `mean(nu^2 / S)`);
+the likelihood is evaluated on the take's most active `ML_WINDOW` samples (`_active_window`).
+The problems are split over the CPU devices (one per core, `fwid._jax_setup`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import NamedTuple
+
+import numpy as np
+
+from . import _model as mdl
+
+#: Samples used to choose the noise levels (from the middle of a take).
+ML_WINDOW = 1000
+#: Largest memory (bytes) of the stored smoother gains of one vmapped call.
+GAIN_BYTES = 2e8
+
+_JIT = {}
+
+
+def _fns():
+    if not _JIT:
+        import jax
+
+        from ._kalman import concentrated_loglik, filter_stats, smooth
+
+        stats = jax.vmap(jax.vmap(filter_stats, in_axes=(None, 0, None, 0, None, None, None,
+                                                         None, None)),
+                         in_axes=(None, 0, 0, None, 0, 0, 0, 0, None))
+        _JIT["grid"] = jax.jit(lambda *a: concentrated_loglik(stats(*a)))
+        _JIT["smooth"] = jax.jit(jax.vmap(smooth, in_axes=(None, 0, 0, 0, 0, 0, 0, 0, None)))
+    return _JIT
+
+
+def _active_window(z, u, mask, dt) -> np.ndarray:
+    """Sample indices `(M, W)` of each problem's most active `ML_WINDOW` samples, where the
+    noise levels are chosen: the window with the largest energy of the second difference of
+    the measured path (`z` less the summed inputs `u`), averaged over ~0.1 s (a take that is
+    quiet but for its manoeuvre must be smoothed as its manoeuvre needs)."""
+    M, N = mask.shape
+    W = min(N, ML_WINDOW)
+    path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
+    k = max(1, int(round(0.1 / dt)))
+    out = np.empty((M, W), int)
+    for m in range(M):
+        y = path[m]
+        good = np.isfinite(y[:, 0])
+        y = np.stack([np.interp(np.arange(N), np.flatnonzero(good), c[good]) for c in y.T], 1)
+        kernel = np.ones(k) / k
+        sm = np.stack([np.convolve(c, kernel, mode="same") for c in y.T], 1)
+        a = np.zeros(N)
+        a[1:-1] = np.sum((sm[2:] - 2 * sm[1:-1] + sm[:-2]) ** 2, 1)
+        a[:k], a[-k:] = 0.0, 0.0  # the convolution's edges
+        c = np.concatenate([[0.0], np.cumsum(a)])
+        start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0
+        out[m] = np.arange(start, start + W)
+    return out
+
+
+def _spread(*arrays):
+    """The arrays (batch first) on every CPU device, split along the batch (padded with
+    copies of the last problem to a multiple of the device count): XLA then runs each
+    device's share of the vmapped loop on its own core. Returns the arrays and the batch."""
+    import jax
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+    M = arrays[0].shape[0]
+    devices = jax.devices()
+    if len(devices) < 2 or M < 2:
+        return [jax.numpy.asarray(a) for a in arrays], M
+    pad = (-M) % len(devices)
+    sharding = NamedSharding(Mesh(np.array(devices), ("b",)), PartitionSpec("b"))
+    out = [np.concatenate([a, np.repeat(a[-1:], pad, 0)]) if pad else a for a in arrays]
+    return [jax.device_put(a, sharding) for a in out], M
+
+
+class Smoothed(NamedTuple):
+    """Smoothed totals `(M, N, c)` (slow part plus harmonics) and the chosen noise levels."""
+
+    pos: np.ndarray
+    vel: np.ndarray
+    acc: np.ndarray
+    bias: np.ndarray | None  # (M, c)
+    sigma: np.ndarray        # (M,) noise std of position/attitude measurements
+    sigma_gyro: np.ndarray | None
+    cutoff: np.ndarray       # (M,) Hz
+    coeff_bandwidth: np.ndarray  # (M,) Hz
+    params: list             # (cutoff, coeff_bandwidth, gyro_ratio) per problem
+
+
+def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None, u=None,
+                 scale: float = 1e-6, params=None) -> Smoothed:
+    """Smooth `M` independent problems of one length `N`, each with `c` data columns that
+    share the noise levels.
+
+    **Arguments:**
+    - `z` `(M, N, c)`: position (attitude) measurements; `mask` `(M, N)`: where they exist;
+    - `phase`, `omega` `(M, N)`: flapping phase and angular frequency (`_model.phase_of`);
+    - `dt`: sample step (s);
+    - `gyro` `(M, N, c)`, `gyro_mask` `(M, N)`: rate measurements (with a bias state), or None;
+    - `u` `(M, N, c)`: known input of the first state per step (the attitude's nominal
+      increment), or None;
+    - `scale`: the measurement variance guessed, for the diffuse prior;
+    - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search;
+      with `gyro_ratio` None, only the gyro's noise is searched.
+
+    **Returns:** a `Smoothed`.
+    """
+    import jax.numpy as jnp
+
+    fns = _fns()
+    z = np.asarray(z, float)
+    M, N, c = z.shape
+    bias = gyro is not None
+    n = mdl.n_states(bias)
+    rate = 1.0 / dt
+    rows = mdl.rows(phase, omega, rate, bias)
+    m_meas = 2 if bias else 1
+    H = np.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), 2)  # (M, N, m, n)
+    Z = np.stack([np.nan_to_num(z)] + ([np.nan_to_num(gyro)] if bias else []), 2)
+    MK = np.stack([mask] + ([gyro_mask] if bias else []), 2).astype(bool)
+    U = np.zeros((M, N, n, c))
+    if u is not None:
+        U[:, :, 0, :] = u
+    F = mdl.transition(dt, bias)
+    P0 = mdl.prior(n, bias, scale)
+    m0 = np.zeros((M, n, c))
+    first = np.argmax(mask, axis=1)
+    m0[:, 0, :] = z[np.arange(M), first]
+    omega0 = np.array([np.nanmedian(o) if np.isfinite(o).any() else 2 * np.pi for o in omega])
+
+    def noise(fc, fh, w0, ratio):
+        qj, qh = mdl.intensities(dt, fc, fh, w0)
+        return mdl.process_noise(dt, qj, qh, bias), np.array([1.0, ratio**2][:m_meas])
+
+    if params is None or any(p[2] is None for p in params):
+        if params is None:
+            grid = [list(itertools.product(mdl.CUTOFFS, mdl.COEFF_BANDWIDTHS,
+                                           mdl.GYRO_RATIOS if bias else (1.0,)))] * M
+        else:  # the motion's levels known (from the attitude alone): the gyro's noise only
+            grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
+        idx = _active_window(z, U[:, :, 0, :], mask, dt)  # (M, W)
+        take = lambda a: np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)  # noqa: E731
+        Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
+        Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
+        if any(gm != grid[0] for gm in grid):  # gyro ratios only: the same for every problem
+            assert all([g for *_, g in gm] == [g for *_, g in grid[0]] for gm in grid)
+        m0w = m0.copy()
+        fw = np.argmax(take(mask), axis=1)
+        m0w[:, 0, :] = take(z)[np.arange(M), fw]
+        (Qs, Hw, Zw, MKw, Uw, m0w), _ = _spread(Qs, take(H), take(Z), take(MK), take(U), m0w)
+        ll = np.asarray(fns["grid"](jnp.asarray(F), Qs, Hw, jnp.asarray(Rs), Zw, MKw, Uw, m0w,
+                                    jnp.asarray(P0)))[:M]
+        best = np.argmax(np.where(np.isfinite(ll), ll, -np.inf), axis=1)
+        params = [gm[b] for gm, b in zip(grid, best)]
+    Q = np.stack([noise(fc, fh, w0, g)[0] for (fc, fh, g), w0 in zip(params, omega0)])
+    R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
+    chunk = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))
+    xs, acc = [], []
+    for a in range(0, M, chunk):
+        s = slice(a, a + chunk)
+        (Qc, Hc, Rc, Zc, MKc, Uc, m0c), m = _spread(Q[s], H[s], R[s], Z[s], MK[s], U[s], m0[s])
+        x, st = fns["smooth"](jnp.asarray(F), Qc, Hc, Rc, Zc, MKc, Uc, m0c, jnp.asarray(P0))
+        xs.append(np.asarray(x)[:m])
+        acc.append(np.asarray(st)[:m])
+    x, acc = np.concatenate(xs), np.concatenate(acc)  # (M, N, n, c), (M, 3)
+    s2 = acc[:, 1] / np.maximum(acc[:, 2], 1)  # the concentrated noise scale
+    out = {k: np.einsum("mkn,mknc->mkc", rows[k], x) for k in ("pos", "vel", "acc")}
+    ratio = np.array([p[2] for p in params])
+    return Smoothed(out["pos"], out["vel"], out["acc"], x[:, 0, -1, :] if bias else None,
+                    np.sqrt(s2), np.sqrt(s2) * ratio if bias else None,
+                    np.array([p[0] for p in params]), np.array([p[1] for p in params]),
+                    list(params))
