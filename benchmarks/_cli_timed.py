@@ -1,5 +1,5 @@
 """`fwid identify ARGS` as a user runs it, with where the time goes: run as a process by
-`_process.py` (`python benchmarks/_cli_timed.py identify FOLDER --model lon --out DIR`).
+`_shared.py` (`python benchmarks/_cli_timed.py identify FOLDER --model lon --out DIR`).
 
 Prints one JSON line: `import` (JAX, diffrax, matplotlib and fwid's stages), `compile`
 (tracing, lowering and XLA compilation or loading from the persistent cache, from JAX's

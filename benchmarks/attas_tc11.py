@@ -21,7 +21,7 @@ import jax.numpy as jnp
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import fwid  # noqa: E402
-from attas_data import (  # noqa: E402
+from cases.attas import (  # noqa: E402
     TC3_BOOK_OEM_L0_CORRECTED,
     TC3_NAMES,
     TC3_THETA0,

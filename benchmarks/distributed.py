@@ -9,7 +9,7 @@ one process with one CPU device, one process with two (fwid's default on 2 cores
 `shard_map` over both), and two processes with one device each (the same `shard_map` over a
 global mesh of two devices, one per process), free to use every core or each pinned to a core
 of its own (`os.sched_setaffinity`, as a cluster gives each process its own cores). Every process builds the same flights
-(`_problem.py`, the speed benchmark's, least-squares start as `fit_each` does by default)
+(`cases/delfly_speed.py`, the speed benchmark's, least-squares start as `fit_each` does by default)
 and calls `fit_each`; the first call (compile + fit) and the median of `--repeats` warm calls
 are timed on process 0 (every call is collective across the processes), and of the last warm
 call the part spent in the least-squares starts (computed by every process for all flights)
@@ -49,7 +49,7 @@ def worker(pid: int, nproc: int, port: int, devices: int, pinned: int, n: int, r
         fwid.initialize_distributed(f"127.0.0.1:{port}", nproc, pid, local_devices=devices)
     sys.path.insert(0, str(HERE))
     import jax
-    from _problem import experiment, make_flights, vehicle_constants
+    from cases.delfly_speed import experiment, make_flights, vehicle_constants
 
     consts, _ = vehicle_constants()
     F = make_flights(n, 0, consts)
@@ -125,7 +125,7 @@ def markdown(recs: list[dict], n: int, load: tuple) -> str:
     lines = [
         "# fit_each over processes: one process against two (jax.distributed)", "",
         f"`python benchmarks/distributed.py --flights {n}`: {n} simulated longitudinal flights "
-        "(`benchmarks/_problem.py`, 4.5 s at 200 Hz, least-squares start), "
+        "(`benchmarks/cases/delfly_speed.py`, 4.5 s at 200 Hz, least-squares start), "
         f"{os.cpu_count()} CPUs, load average {load[0]:.1f} at start, "
         f"{os.getloadavg()[0]:.1f} at end. "
         "All layouts in the same run, each in fresh processes with the compilation cache off. "

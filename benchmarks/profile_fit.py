@@ -4,7 +4,7 @@
                                      [--start true1.2|least-squares]
 
 (`python benchmarks/speed.py --profile` runs the same after its tables and puts it in
-speed.json under "profile" and in speed.md.) On the problem of `_problem.py`:
+speed.json under "profile" and in speed.md.) On the problem of `cases/delfly_speed.py`:
 
 - micro-benchmarks of fwid's parts against a `lax.scan` RK4: the simulation, `jacfwd` through
   diffrax, and the one-solve outputs + sensitivities that fwid's estimator runs per
@@ -33,7 +33,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))  # the fwid of this checkout, not another installed one
 
-from _problem import DT, lon_f_jax, setup  # noqa: E402  (first: imports fwid, float64 on)
+from cases.delfly_speed import DT, lon_f_jax, setup  # noqa: E402  (first: imports fwid, float64 on)
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
@@ -41,9 +41,9 @@ import jax.numpy as jnp  # noqa: E402
 import fwid  # noqa: E402
 from fwid.estimate import _output_error as _oe  # noqa: E402
 
-import _measure as M  # noqa: E402
-from _jax_reference import rk4_scan  # noqa: E402
-from _methods import Bench  # noqa: E402
+import _shared as M  # noqa: E402
+from peers.jax_output_error import rk4_scan  # noqa: E402
+from _shared import Bench  # noqa: E402
 
 N_FLIGHTS = 4  # the batched calls of the interleaved timings fit flights 0-3
 

@@ -5,7 +5,7 @@ arithmetic of the problem?
     python benchmarks/simd.py [--flights 64] [--rounds 30]
                               [--out benchmarks/results/simd.json]
 
-The problem is `speed.py`'s (`_problem.py`: Eq. 7 + biases, 16 parameters, 900 samples,
+The problem is `speed.py`'s (`cases/delfly_speed.py`: Eq. 7 + biases, 16 parameters, 900 samples,
 start true x 1.2). Measured in one run:
 
 1. **The kernel of a Gauss-Newton step** (the outputs and their 16 sensitivities over a
@@ -49,9 +49,9 @@ import numpy as np  # noqa: E402
 import fwid  # noqa: E402
 from fwid.simulation._simulate import simulate_sensitivities  # noqa: E402
 
-import _measure as M  # noqa: E402
-import _problem as P  # noqa: E402
-from _jax_reference import rk4_scan  # noqa: E402
+import _shared as M  # noqa: E402
+import cases.delfly_speed as P  # noqa: E402
+from peers.jax_output_error import rk4_scan  # noqa: E402
 
 
 def _flops(fn, *a) -> float:
@@ -222,7 +222,7 @@ def markdown(res) -> str:
     lines = [
         "# Many flights against the machine's limit (`benchmarks/simd.py`)", "",
         M.machine_line(res["machine"], "simd.py"), "",
-        f"Problem: `_problem.py` (Eq. 7 + biases, 16 parameters, {res['samples']} samples), "
+        f"Problem: `cases/delfly_speed.py` (Eq. 7 + biases, 16 parameters, {res['samples']} samples), "
         f"{n} flights. Total {res['total_s']:.0f} s.", "",
         "## The arithmetic (XLA's cost analysis, per flight)", "",
         f"- one RK4 step of the outputs and their 16 sensitivities: "

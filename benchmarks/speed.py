@@ -4,7 +4,7 @@
                                [--quick] [--profile]
     python benchmarks/speed.py --process [1,16,64]   # the whole process: fwid identify
 
-The same fits, in the same run, by three methods (set up in `benchmarks/_methods.py`):
+The same fits, in the same run, by three methods (set up in `benchmarks/_shared.py`):
 
 1. **fwid**: `fwid.fit` on one flight; for N flights, N *independent* fits in one batched
    call, `fwid.fit_each`. Where fwid has no `fit_each` (older versions), or the flights start
@@ -13,14 +13,14 @@ The same fits, in the same run, by three methods (set up in `benchmarks/_methods
    flight a batch of one, fwid.fit's default settings read from its signature). The batched
    estimates are checked against `fwid.fit` on each flight alone (rows "fwid.fit loop";
    identical means within 1e-9 relative).
-2. **scipy**: `benchmarks/_baseline.py` (numpy RK4 + `scipy.optimize.least_squares`, finite
+2. **scipy**: `benchmarks/peers/scipy_output_error.py` (numpy RK4 + `scipy.optimize.least_squares`, finite
    differences), a Python loop over flights. Only a subset of flights is timed; for larger N
    the time is the measured mean per flight times N, marked *extrapolated*.
-3. **JAX reference**: `benchmarks/_jax_reference.py` (`lax.scan` RK4, jacfwd, hand-written
+3. **JAX reference**: `benchmarks/peers/jax_output_error.py` (`lax.scan` RK4, jacfwd, hand-written
    Gauss-Newton with step halving, R relaxed every iteration), `vmap` for batches: the
    practical speed limit of the problem in JAX.
 
-Problem (`benchmarks/_problem.py`): simulated DelFly longitudinal flights (Eq. 7 with the
+Problem (`benchmarks/cases/delfly_speed.py`): simulated DelFly longitudinal flights (Eq. 7 with the
 four bias terms, 16 free parameters), 4.5 s at 200 Hz (900 samples), elevator 3211 (even
 flights) or doublet (odd flights), white Gaussian measurement noise on all four states; every
 method starts from the same values (true x 1.2 by default). Flight i is the same at every
@@ -58,9 +58,9 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))  # the fwid of this checkout, not another installed one
 
-from _problem import setup  # noqa: E402  (first: imports fwid, float64 on)
+from cases.delfly_speed import setup  # noqa: E402  (first: imports fwid, float64 on)
 
-from _measure import (  # noqa: E402
+from _shared import (  # noqa: E402
     block,
     interleaved,
     machine,
@@ -70,7 +70,7 @@ from _measure import (  # noqa: E402
     write,
     xla_memory,
 )
-from _methods import Bench, agreement  # noqa: E402
+from _shared import Bench, agreement  # noqa: E402
 from profile_fit import markdown_lines as profile_lines  # noqa: E402
 from profile_fit import run_profile  # noqa: E402
 
@@ -339,15 +339,15 @@ def markdown(res):
 
 
 def process_row(args):
-    """`--process`: see `benchmarks/_process.py`."""
-    import _process
+    """`--process`: see `benchmarks/_shared.py` (whole process)."""
+    from _shared import process_markdown, run_process
 
     load0 = os.getloadavg()
-    res = _process.run([int(n) for n in args.process.split(",")],
-                       min(args.scipy_flights, 2), args.seed)
+    res = run_process([int(n) for n in args.process.split(",")],
+                      min(args.scipy_flights, 2), args.seed)
     res["machine"] = machine(load0)
     out = HERE / "results" / "speed_process.json"
-    write(res, out, _process.markdown(res, machine_line(res["machine"], "speed.py")))
+    write(res, out, process_markdown(res, machine_line(res["machine"], "speed.py")))
 
 
 def main(argv=None):
@@ -370,7 +370,7 @@ def main(argv=None):
     ap.add_argument("--process", nargs="?", const="1,16,64", default=None, metavar="SIZES",
                     help="instead: the whole-process row, `fwid identify` from a shell on "
                     "SIZES flights (default 1,16,64), cold and warm compilation cache, against "
-                    "scipy in the same run (benchmarks/_process.py); writes "
+                    "scipy in the same run (benchmarks/_shared.py); writes "
                     "results/speed_process.json and .md")
     args = ap.parse_args(argv)
     if args.process:

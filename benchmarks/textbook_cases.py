@@ -5,15 +5,15 @@
 Writes ``{case: {param: {"value": .., "std": ..}}}`` for
 
 * ``tc01``: FVSysID test case 1, ATTAS lateral-directional, 5 outputs, 22 parameters
-  (`_tc01.py`);
+  (`tc01.py`);
 * ``tc04_oem``: FVSysID test case 4, HFB-320 longitudinal nonlinear model, 7 outputs
-  (`_tc04.py`);
+  (`tc04.py`);
 * ``twin_otter_tlonss``: SIDPAC's Twin Otter `tlonss` demo, outputs alpha, q, az, ``p1..p9``
-  (`_twin_otter.py`);
+  (`twin_otter.py`);
 * ``tc08``: FVSysID test case 8, the unstable aircraft, by ``method="multiple-shooting"``
-  (`_tc08.py`, `_method_cases.py`; with the errors from the true values);
+  (`tc08.py`, `cases/methods.py`; with the errors from the true values);
 * ``tc04_fem``: test case 4 by ``method="filter-error"``, against the book's filter-error
-  estimates; ``tc02_fem``: test case 2, lateral-directional in turbulence (`_tc02.py`), by
+  estimates; ``tc02_fem``: test case 2, lateral-directional in turbulence (`tc02.py`), by
   filter error (converged, stable, innovations white);
 * ``speed_fem_vs_oem``: the time of the filter-error fit of TC04 against the output-error one;
 * ``gust_fem_vs_oem``: simulated DelFly flights in gusts, filter error against output error
@@ -22,12 +22,12 @@ Writes ``{case: {param: {"value": .., "std": ..}}}`` for
 ``--cases`` also takes the cases output error cannot do well, where what counts is that fwid
 says so (no reference; their warnings are in ``"_fwid"``):
 
-* ``tc08_unstable``: FVSysID test case 8, an unstable aircraft's short period (`_tc08.py`);
+* ``tc08_unstable``: FVSysID test case 8, an unstable aircraft's short period (`tc08.py`);
 * ``tc02_turbulence``: FVSysID test case 2, lateral motion simulated with turbulence
-  (`_tc02.py`).
+  (`tc02.py`).
 
 ``--reference`` also fits each case with the independent numpy/scipy estimator
-(`_baseline.py`, diagonal R as FVSysID and SIDPAC) and adds, per case, the key
+(`peers/scipy_output_error.py`, diagonal R as FVSysID and SIDPAC) and adds, per case, the key
 ``"_reference"`` (the same layout) and ``"_agreement"`` (relative difference per parameter,
 worst first) and ``"_fwid"`` (steps, converged, the R used, warnings, wall time). The data are
 read from ``../shared/flightdata`` (or ``$FWID_FLIGHTDATA_ROOT``), never copied.
@@ -44,18 +44,18 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import _tc01  # noqa: E402
-import _tc02  # noqa: E402
-import _tc04  # noqa: E402
-import _tc08  # noqa: E402
-import _twin_otter  # noqa: E402
-from _method_cases import RUNNERS  # noqa: E402
-from _textbook import agreement, as_table, fit_fwid, fit_reference, fwid_table  # noqa: E402
+from cases import tc01  # noqa: E402
+from cases import tc02  # noqa: E402
+from cases import tc04  # noqa: E402
+from cases import tc08  # noqa: E402
+from cases import twin_otter  # noqa: E402
+from cases.methods import RUNNERS  # noqa: E402
+from cases.textbook import agreement, as_table, fit_fwid, fit_reference, fwid_table  # noqa: E402
 
-CASES = {"tc01": lambda: _tc01.CASE, "tc04_oem": lambda: _tc04.CASE,
-         "twin_otter_tlonss": _twin_otter.case}
+CASES = {"tc01": lambda: tc01.CASE, "tc04_oem": lambda: tc04.CASE,
+         "twin_otter_tlonss": twin_otter.case}
 #: no reference: these check that fwid's warnings name the problem
-HARD = {"tc08_unstable": lambda: _tc08.CASE, "tc02_turbulence": lambda: _tc02.CASE}
+HARD = {"tc08_unstable": lambda: tc08.CASE, "tc02_turbulence": lambda: tc02.CASE}
 
 
 def run_case(key: str, reference: bool) -> dict:

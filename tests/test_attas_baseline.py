@@ -1,4 +1,4 @@
-"""Checks of the independent numpy/scipy baseline (benchmarks/_baseline.py) on real ATTAS data.
+"""Checks of the independent numpy/scipy baseline (benchmarks/peers/scipy_output_error.py) on real ATTAS data.
 
 TEMPORARY: this tests the *reference* estimator, not fwid. It is to be superseded by fwid's
 own ATTAS test (which should compare fwid against the same published values). Skipped when
@@ -14,8 +14,8 @@ from scipy.linalg import expm
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-from _baseline import fit_output_error, rk4_simulate  # noqa: E402
-from attas_data import (  # noqa: E402
+from peers.scipy_output_error import fit_output_error, rk4_simulate  # noqa: E402
+from cases.attas import (  # noqa: E402
     TC11_BOOK_OEM,
     TC11_THETA0,
     default_folder,

@@ -93,6 +93,100 @@ def test_the_check_sees_an_upward_import(tmp_path):
     assert [t for _, t in found] == ["identification", "report", "validate"]
 
 
+
+def _module_name(path: Path, package: Path) -> str:
+    parts = list(path.relative_to(package.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _import_graph(package: Path = PACKAGE) -> dict[str, set[str]]:
+    """Every module of `package` -> the modules of `package` it imports, at the top or inside a
+    function. Importing `a.b.c` also runs the package `a.b` (unless the importer lives in it),
+    so that package is an edge too."""
+    paths = {_module_name(p, package): p for p in sorted(package.rglob("*.py"))
+             if "__pycache__" not in p.parts}
+    graph = {}
+    for name, path in paths.items():
+        own = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = own.split(".")[: len(own.split(".")) - node.level + 1]
+                    mod = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    mod = node.module or ""
+                targets.add(mod)
+                targets.update(f"{mod}.{a.name}" for a in node.names)  # `from . import _x`
+            elif isinstance(node, ast.Import):
+                targets.update(a.name for a in node.names)
+        edges = set()
+        for t in targets:
+            if t not in paths:
+                continue
+            parts = t.split(".")
+            for k in range(1, len(parts) + 1):  # the module and the packages it runs
+                anc = ".".join(parts[:k])
+                if anc in paths and anc != name and not own.startswith(anc):
+                    edges.add(anc)
+        graph[name] = edges
+    return graph
+
+
+def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import circles of `graph`: its strongly connected components with more than one
+    module (Tarjan's algorithm)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_circle():
+    """No module of fwid imports, directly or through others, a module that imports it."""
+    circles = _circles(_import_graph())
+    assert not circles, "import circles:\n" + "\n".join(" <-> ".join(c) for c in circles)
+
+
+def test_the_check_sees_an_import_circle(tmp_path):
+    """A circle through a function-level import and a package `__init__` is found; a package
+    importing its own modules is not a circle."""
+    pkg = tmp_path / "fwid"
+    (pkg / "estimate").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "estimate" / "__init__.py").write_text("from ._fit import fit\n")
+    (pkg / "estimate" / "_fit.py").write_text("from ._oe import fit_oe\ndef fit(): pass\n")
+    (pkg / "estimate" / "_oe.py").write_text("from . import _problem\ndef fit_oe(): pass\n")
+    (pkg / "estimate" / "_problem.py").write_text("X = 1\n")
+    assert _circles(_import_graph(pkg)) == []
+    (pkg / "estimate" / "_problem.py").write_text("def f():\n    from ._fit import fit\n")
+    assert _circles(_import_graph(pkg)) == [["fwid.estimate._fit", "fwid.estimate._oe",
+                                             "fwid.estimate._problem"]]
+
+
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_module_size(path):
     n = len(path.read_text().splitlines())

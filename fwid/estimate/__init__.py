@@ -1,5 +1,6 @@
 from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
-from ._output_error import FitResult as FitResult, fit as fit
+from ._problem import FitResult as FitResult
+from ._fit import METHODS as METHODS, fit as fit
 from ._each import fit_each as fit_each
 from ._distributed import initialize_distributed as initialize_distributed
 from ._start import least_squares_start as least_squares_start

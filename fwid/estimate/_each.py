@@ -1,5 +1,5 @@
 """Each flight fitted on its own: by output-error ML (Eqs. 10-11) all in one vmapped call, or
-by another of [`fwid.fit`][]'s methods (`_methods.py`) flight by flight."""
+by another of [`fwid.fit`][]'s methods (`_fit.py`) flight by flight."""
 
 from __future__ import annotations
 
@@ -26,9 +26,10 @@ from ._devices import (
     to_host,
 )
 from . import _exported as exported
-from ._methods import METHODS
+from ._fit import METHODS, fit
 from ._noise import check_noise, fall_back
-from ._output_error import FitResult, _fit_batch, _prepare, _result, fit, with_instability
+from ._output_error import _fit_batch, _result, with_instability
+from ._problem import FitResult, prepare
 from ._start_each import least_squares_start_each
 from ._warnings import issue
 
@@ -85,7 +86,7 @@ def fit_each(
     XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
     on each flight alone. Arguments as for [`fwid.fit`][].
 
-    `method` and `options` pick the estimator as in [`fwid.fit`][] (`_methods.py`):
+    `method` and `options` pick the estimator as in [`fwid.fit`][] (`_fit.py`):
     `"output-error"` (the default) is the vmapped call above; `"multiple-shooting"` and
     `"filter-error"` are not vmapped (their Python-level loops: the segments' layout, the
     filter error's relaxation passes of R with the F compensation, Eq. 5.41) but run as
@@ -117,11 +118,11 @@ def fit_each(
     t0 = time.perf_counter()
     if isinstance(start, str) and start == "least-squares":  # a start of its own per flight
         for e, n in zip(exps, names):  # the checks first, flight by flight
-            _prepare(model, [e], [n], "model", 0)
-        starts = [_prepare(model, [e], [n], s, 0)  # all starts in one batched call
+            prepare(model, [e], [n], "model", 0)
+        starts = [prepare(model, [e], [n], s, 0)  # all starts in one batched call
                   for e, n, s in zip(exps, names, least_squares_start_each(model, exps))]
     else:  # one start for all (the checks still run on every flight)
-        starts = [_prepare(model, exps, names, start, 0)] * len(exps)
+        starts = [prepare(model, exps, names, start, 0)] * len(exps)
     kw = dict(max_passes=max_passes, max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol)
     if progress:
         print(f"fwid: fitting {model.name} to {len(exps)} flights in one batched call"

@@ -42,7 +42,7 @@ from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment, stack_experiments
 from ._gauss_newton import NoiseModel, noise_covariance, solve_relaxed
 from ._noise import check_noise
-from ._output_error import FitResult, _free_layout, _merge_batch, _prepare, flight_params
+from ._problem import FitResult, flight_params, free_layout, merge_batch, prepare
 from ._riccati import steady_state_gain
 from ._steps import rk4_step
 from ._uncertainty import correlation, covariance, lag1_autocorrelation
@@ -131,7 +131,7 @@ def _innovations(model, theta, Rk, batch, p, gain=True, n_local=0):
     if n_local == 0:
         params = model.merge(theta[:p])
         return jax.vmap(lambda e: _filter(model, params, theta[p:], Rk, e, gain))(batch)
-    merged = _merge_batch(model, theta[:p], n_local)
+    merged = merge_batch(model, theta[:p], n_local)
     return jax.vmap(lambda e, b: _filter(model, flight_params(merged, b), theta[p:], Rk, e,
                                          gain))(batch, jnp.arange(n_local))
 
@@ -230,7 +230,7 @@ def fit_filter_error(
     diagonal = noise != "full"
     t0 = time.perf_counter()
     n_local = len(exps) if (local_per_flight and len(exps) > 1 and model.local) else 0
-    start_model, theta0 = _prepare(model, list(exps), list(names), start, n_local)
+    start_model, theta0 = prepare(model, list(exps), list(names), start, n_local)
     p = theta0.shape[0]
     f0 = np.asarray(_default_f(model, exps) if process_noise is None else process_noise,
                     dtype=float)
@@ -294,9 +294,9 @@ def fit_filter_error(
     std = jnp.sqrt(jnp.abs(jnp.diag(cov)))
     v = out["v"]
     f_names = tuple(f"F_{s}" for s in model.states)
-    free_names = _free_layout(model, n_local)[2]
+    free_names = free_layout(model, n_local)[2]
     all_names = (*free_names, *f_names)
-    first = flight_params(_merge_batch(model, theta[:p], n_local), 0)  # flight 0's locals
+    first = flight_params(merge_batch(model, theta[:p], n_local), 0)  # flight 0's locals
     fitted = start_model.with_params({k: first[k] for k in model.free})
     res = FilterErrorResult(
         model=fitted, names=all_names, theta=theta, std=std, std_cr=std, cov=cov,

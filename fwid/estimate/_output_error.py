@@ -10,20 +10,25 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Bool, Float, Int
 
-from .._errors import ExcitationError, FitDivergedError
+from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulation._buckets import bucket_length, pad_experiment
-from ..simulation._checks import check_experiment
-from ..simulation._experiment import Experiment, stack_experiments, with_measured_x0
+from ..simulation._experiment import Experiment, stack_experiments
 from ..simulation._simulate import simulate, simulate_sensitivities
 from . import _exported as exported
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
+from ._problem import (
+    FitResult,
+    check_information,
+    flight_params,
+    free_layout,
+    merge_batch,
+    prepare,
+)
 from ._stability import instability_warning
-from ._start import least_squares_start
 from ._uncertainty import (
     coloured_residual_middle,
     correlation,
@@ -39,85 +44,6 @@ from ._warnings import fit_warnings, issue
 LAG_WINDOW_FACTOR = 4
 
 
-class FitResult(eqx.Module):
-    """The output of [`fwid.fit`][]: estimates, their uncertainty and the fit's history.
-
-    **Fields:**
-    - `model`: the model with its parameters set to the estimates.
-    - `names`: the free parameters, in the order of `theta`, `std`, `cov`; in a joint fit of
-      several flights the model's `local` parameters (bias terms) are estimated per flight
-      and named `bq@0`, `bq@1`, ... after the flight's index.
-    - `theta`: the estimates of the free parameters.
-    - `std`: standard deviations corrected for coloured residuals (Morelli and Klein, with a
-      Bartlett lag window twice the residuals' correlation length).
-    - `std_cr`: the plain Cramer-Rao standard deviations, `sqrt(diag(M^-1))`.
-    - `cov`: the covariance matrix behind `std`; `corr` its correlation matrix.
-    - `R`: the measurement-noise covariance estimate, Eq. (11).
-    - `cost`: the negative log-likelihood, Eq. (10), at the estimate.
-    - `cost_history`: the cost after each accepted Gauss-Newton step, each of which also
-      relaxes R (NaN after the last).
-    - `passes`, `steps`: R relaxations (accepted Gauss-Newton steps) and Gauss-Newton
-      steps taken (evaluations, the start and any halved steps included).
-    - `converged`: whether the cost and the parameters settled within tolerance.
-    - `start`: the least-squares start values of the free parameters.
-    - `warnings`: what should not be trusted about this fit (not converged, R
-      ill-conditioned, residuals of model error or process noise, an unstable model growing
-      beyond 100-fold over the record, parameters correlated beyond 0.98, not finite), one
-      sentence each;
-      [`fwid.fit`][] also issues each as a [`fwid.FitWarning`][].
-    - `noise`: the R the estimates belong to, `"full"` or `"diagonal"` (with `noise="auto"`
-      a diagonal R replaces a full one that failed, see `fwid.estimate._noise`).
-    - `lag1`: each output's residual autocorrelation at one sample (the largest over the
-      experiments): near 0 for white measurement noise, near 1 for coloured residuals
-      (process noise or a missing effect).
-    - `colour`: each output's residual autocorrelation at the lag that spans half a period
-      at the data's bandwidth (`fwid.estimate._colour`; the largest over the experiments):
-      near 0 for measurement noise, white or pre-filtered, near 1 for model error. This,
-      not `lag1`, is what the model-error warning and `noise="auto"` read.
-    - `residual_corr`: the correlation matrix of the residuals between the outputs (whatever
-      R the fit used).
-    """
-
-    model: GreyBoxModel
-    names: tuple[str, ...] = eqx.field(static=True)
-    theta: Float[Array, " p"]
-    std: Float[Array, " p"]
-    std_cr: Float[Array, " p"]
-    cov: Float[Array, "p p"]
-    corr: Float[Array, "p p"]
-    R: Float[Array, "ny ny"]
-    cost: Float[Array, ""]
-    cost_history: Float[Array, " passes"]
-    passes: Int[Array, ""]
-    steps: Int[Array, ""]
-    converged: Bool[Array, ""]
-    start: Float[Array, " p"]
-    warnings: tuple[str, ...] = eqx.field(static=True, default=())
-    noise: str = eqx.field(static=True, default="full")
-    lag1: Float[Array, " ny"] | None = None
-    residual_corr: Float[Array, "ny ny"] | None = None
-    colour: Float[Array, " ny"] | None = None
-
-    @property
-    def params(self) -> dict:
-        return self.model.params
-
-    def flight_model(self, i: int) -> GreyBoxModel:
-        """The model with flight `i`'s own local parameters (bias terms) of a joint fit."""
-        local = {k: self.theta[self.names.index(f"{k}@{i}")]
-                 for k in self.model.local if f"{k}@{i}" in self.names}
-        return self.model.with_params(local)
-
-    def table(self) -> dict[str, dict[str, float]]:
-        """`{name: {value, std, std_cr, rel_std_pct}}`, Table 1's layout."""
-        out = {}
-        for i, k in enumerate(self.names):
-            v, s = float(self.theta[i]), float(self.std[i])
-            out[k] = dict(value=v, std=s, std_cr=float(self.std_cr[i]),
-                          rel_std_pct=100.0 * abs(s / v) if v != 0 else float("inf"))
-        return out
-
-
 def _simulate_batch(model, params, batch: Experiment):
     """Simulate every experiment of a batch; `params` values are scalars or `(B,)` arrays."""
     B = batch.t.shape[0]
@@ -125,35 +51,9 @@ def _simulate_batch(model, params, batch: Experiment):
     return jax.vmap(lambda e, p: simulate(model, e, p)[1])(batch, pb)
 
 
-def _raw_residuals(model, params, batch):
+def raw_residuals(model, params, batch):
     y = _simulate_batch(model, params, batch)
     return (batch.z - y) * batch.mask[..., None]
-
-
-def _free_layout(model: GreyBoxModel, n_local_batch: int):
-    """The layout of the free vector: global names, local names, and every entry's name."""
-    glob = [k for k in model.free if k not in model.local or n_local_batch == 0]
-    loc = [k for k in model.free if k in model.local and n_local_batch > 0]
-    names = glob + [f"{k}@{b}" for k in loc for b in range(n_local_batch)]
-    return glob, loc, names
-
-
-def _merge_batch(model: GreyBoxModel, theta, n_local_batch: int):
-    """Parameter dict from the vector `[global free..., local free x B]` (locals per flight)."""
-    glob, loc, _ = _free_layout(model, n_local_batch)
-    params = dict(model.params)
-    for i, k in enumerate(glob):
-        params[k] = theta[i]
-    for j, k in enumerate(loc):
-        start = len(glob) + j * n_local_batch
-        params[k] = theta[start:start + n_local_batch]
-    return params
-
-
-def flight_params(merged: dict, b) -> dict:
-    """Flight `b`'s parameters from [`_merge_batch`][]'s dict (a local parameter is an array
-    with one value per flight, a global one a scalar)."""
-    return {k: (v if jnp.ndim(v) == 0 else v[b]) for k, v in merged.items()}
 
 
 def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_passes,
@@ -175,7 +75,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     def residuals_and_jacobian(theta):
         def one(e, b):
             def params_of(th):  # flight b's parameters (its own local ones in joint fits)
-                return flight_params(_merge_batch(model, th, n_local_batch), b)
+                return flight_params(merge_batch(model, th, n_local_batch), b)
             return simulate_sensitivities(model, e, params_of, theta)
 
         B = batch.t.shape[0]
@@ -205,7 +105,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     cov_cr = covariance(M)
     cov_c = covariance(M, middle)
     finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
-    merged = _merge_batch(model, theta, n_local_batch)
+    merged = merge_batch(model, theta, n_local_batch)
     first = flight_params(merged, 0)  # flight 0's locals
     return dict(theta=theta, R=R, cost=cost, finite=finite, params=first,
                 std=jnp.sqrt(jnp.diag(cov_c)), std_cr=jnp.sqrt(jnp.diag(cov_cr)),
@@ -226,34 +126,11 @@ def _fit_one_jit(model, theta0, exp: Experiment, **kw):
     return _fit_batch(model, theta0, jax.tree.map(lambda a: a[None], exp), **kw)
 
 
-def _check_excitation(model: GreyBoxModel, exps: Sequence[Experiment], names: Sequence[str]):
-    for e, name in zip(exps, names):
-        u = np.asarray(e.u)
-        still = [model.inputs[j] for j in range(u.shape[1]) if np.ptp(u[:, j]) < 1e-12]
-        if len(still) == u.shape[1] and u.shape[1] > 0:
-            raise ExcitationError(
-                f"{name}: input {', '.join(repr(s) for s in still)} never moves: there is no "
-                "manoeuvre to identify the model from; use a flight with a doublet/3211 input"
-            )
-
-
-def _check_information(result, names, flights):
-    M = np.asarray(result["M"])
-    d = np.sqrt(np.clip(np.diag(M), 0, None))
-    bad = [names[i] for i in range(len(names)) if not np.isfinite(d[i]) or d[i] <= 1e-10 * d.max()]
-    if bad:
-        raise ExcitationError(
-            f"{', '.join(flights)}: the data carry no information on parameter"
-            f"{'s' if len(bad) > 1 else ''} {', '.join(bad)} (too little excitation); fix "
-            "them (`model.with_free(...)`) or add flights whose inputs excite them"
-        )
-
-
-def fit(
+def fit_output_error(
     model: GreyBoxModel,
-    experiments: Experiment | Sequence[Experiment],
+    exps: Sequence[Experiment],
     *,
-    names: Sequence[str] | None = None,
+    names: Sequence[str],
     start: str | GreyBoxModel = "least-squares",
     noise: str = "auto",
     max_passes: int = 12,
@@ -262,66 +139,20 @@ def fit(
     cost_rtol: float = 1e-10,
     local_per_flight: bool | None = None,
     progress: bool = False,
-    method: str = "output-error",
-    **options,
 ) -> FitResult:
-    """Estimate the free parameters of `model` by output-error maximum likelihood.
+    """[`fwid.fit`][] with `method="output-error"`, Eqs. (10)-(11): Gauss-Newton with R
+    relaxed at every step, on experiments whose `x0` is set (`with_measured_x0`).
 
-    The cost is the negative log-likelihood of Eq. (10), minimised by Gauss-Newton
-    (optimistix) with the measurement-noise covariance R relaxed (Eq. 11) at every step, as
-    in Jategaonkar's output-error method: R from the current residuals, the Gauss-Newton step
-    `(sum J^T R^-1 J) dtheta = -sum J^T R^-1 v`, halved until the likelihood decreases. The
-    Jacobians come from the forward sensitivity equations integrated with the state in one
-    diffrax RK4 solve. Several experiments are fitted together (one parameter set, each
-    integrated from its own initial state).
-
-    **Arguments:**
-    - `model`: the [`fwid.GreyBoxModel`][]; its free parameters are estimated.
-    - `experiments`: one [`fwid.Experiment`][] or a list of them.
-    - `names`: the experiments' names, for messages (default `exp0`, `exp1`, ...).
-    - `start`: `"least-squares"` (equation error, as the paper), `"model"` (the model's
-      current values), or a model whose values to start from.
-    - `noise`: `"full"` R (Eq. 11), `"diagonal"` (uncorrelated output noise), or `"auto"`:
-      a full R, replaced by a diagonal one when the full-R fit does not converge, is not
-      finite or ends with an ill-conditioned R (`FitResult.noise` says which was used).
-    - `max_steps`: Gauss-Newton steps (each relaxes R). `max_passes` is accepted for
-      compatibility and unused (R used to be relaxed between whole Gauss-Newton solves).
-    - `rtol`: stop when the next step is below `1e-9 + rtol |theta_i|` for every parameter,
-      in units in which each has unit sensitivity (about its standard deviation), ...
-    - `cost_rtol`: ... and the cost has settled to `cost_rtol (1 + |cost|)`.
-    - `local_per_flight`: with several experiments, estimate the model's `local` parameters
-      (bias terms) separately for each one (named `name@i`); otherwise they are shared.
-      Default (`None`): per flight for output error, shared for multiple shooting and filter
-      error (`True` makes filter error estimate them per flight too).
-    - `progress`: print a line when the fit starts and ends.
-    - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
-      (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
-      `"filter-error"` for data with process noise (`fwid.estimate._filter_error`).
-    - `options`: the chosen method's own options.
+    **Arguments:** as [`fwid.fit`][].
 
     **Returns:** a [`fwid.FitResult`][].
-
-    **Raises:** [`fwid.InputError`][] when an experiment's time axis is not uniform or its
-    `u`, `z`, `x0` do not match the model's inputs, outputs and states (or `x0` is missing
-    where the outputs are not the states and do not include them all; where they include
-    them, a missing `x0` is their first measured sample), [`fwid.ExcitationError`][] when the data cannot
-    identify a parameter, [`fwid.FitDivergedError`][] when the cost cannot be made finite.
     """
     check_noise(noise)
-    exps = [experiments] if isinstance(experiments, Experiment) else list(experiments)
-    exps = [with_measured_x0(model, e) for e in exps]
-    names = list(names) if names is not None else [f"exp{i}" for i in range(len(exps))]
-    if method != "output-error" or options:
-        from ._methods import fit_method
-        if method == "filter-error" and local_per_flight is not None:
-            options = {**options, "local_per_flight": local_per_flight}
-        return fit_method(method, model, exps, options, names=names, start=start, noise=noise,
-                          max_steps=max_steps, rtol=rtol, cost_rtol=cost_rtol,
-                          progress=progress, **options)
+    names = list(names)
     t0 = time.perf_counter()
     per_flight = len(exps) > 1 and model.local and local_per_flight is not False
     n_local = len(exps) if per_flight else 0
-    start_model, theta0 = _prepare(model, exps, names, start, n_local)
+    start_model, theta0 = prepare(model, exps, names, start, n_local)
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
               f"{', '.join(names)} ...", flush=True)
@@ -365,43 +196,17 @@ def with_instability(result: FitResult, exps, names) -> FitResult:
     return dataclasses.replace(result, warnings=(*result.warnings, note))
 
 
-def _prepare(model, exps, names, start, n_local):
-    """Checks and start values: the start model and the initial free vector."""
-    if not model.free:
-        raise ValueError(f"model {model.name!r} has no free parameters to estimate")
-    for e, name in zip(exps, names):
-        if e.t.dtype != jnp.float64:
-            raise TypeError("fwid.fit needs float64 arrays: enable jax_enable_x64 (import fwid)")
-        check_experiment(model, e, name)
-    _check_excitation(model, exps, names)
-    if isinstance(start, GreyBoxModel):
-        start_model = model.with_params(start.params)
-    elif start == "least-squares":
-        start_model = least_squares_start(model, exps)
-    elif start == "model":
-        start_model = model
-    else:
-        raise ValueError(f"start must be 'least-squares', 'model' or a model, not {start!r}")
-    glob, loc, _ = _free_layout(model, n_local)
-    vals = jax.device_get({k: start_model.params[k] for k in (*glob, *loc)})
-    theta0 = jnp.asarray(np.concatenate([
-        np.array([vals[k] for k in glob], dtype=float),
-        *[np.full(n_local, vals[k], dtype=float) for k in loc],
-    ]))
-    return start_model, theta0
-
-
 def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
             noise="full") -> FitResult:
     """Check the estimator's raw output and wrap it in a [`fwid.FitResult`][]."""
-    glob, loc, free_names = _free_layout(model, n_local)
+    glob, loc, free_names = free_layout(model, n_local)
     if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
         raise FitDivergedError(
             f"{', '.join(names)}: the {model.name} fit diverged (the simulation blows up for "
             "every step tried from the start values); check the units and the trim, or give "
             "start values (`start=model.with_params(...)`)"
         )
-    _check_information(out, free_names, names)
+    check_information(out, free_names, names)
     result = FitResult(
         model=eqx.tree_at(lambda m: m.params, start_model, dict(out["params"])),
         names=tuple(free_names),

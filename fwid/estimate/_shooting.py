@@ -40,6 +40,7 @@ from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
 from ._gauss_newton import ml_cost, noise_covariance
 from ._noise import check_noise, fall_back
+from ._problem import FitResult, prepare
 from ._uncertainty import correlation, lag1_autocorrelation
 from ._warnings import fit_warnings, issue
 
@@ -231,15 +232,13 @@ def fit_shooting(
     (see the module docstring). The model's `local`
     parameters are shared between the experiments. Returns a [`fwid.FitResult`][] whose
     `std` and `std_cr` are both the constrained Cramer-Rao bounds."""
-    from ._output_error import FitResult, _prepare  # (the public fit dispatches here)
-
     check_noise(noise)
     if segments is None:
         segments = max(1, -(-(max(e.n for e in exps) - 1) // SEGMENT_SAMPLES))
     if not isinstance(segments, int) or segments < 1:
         raise ValueError(f"segments must be a positive integer, not {segments!r}")
     t0 = time.perf_counter()
-    start_model, theta0 = _prepare(model, list(exps), list(names), start, 0)
+    start_model, theta0 = prepare(model, list(exps), list(names), start, 0)
     seg, s0 = _segments(model, exps, segments)
     vec0 = jnp.concatenate([theta0, jnp.asarray(s0, dtype=float)])
     z = seg.exp.z * seg.exp.mask[..., None]

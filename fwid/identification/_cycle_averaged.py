@@ -12,7 +12,8 @@ import numpy as np
 from .._errors import InputError
 from ..data._flight import Flight
 from ..estimate._each import fit_each
-from ..estimate._output_error import FitResult, fit
+from ..estimate._fit import fit
+from ..estimate._problem import FitResult
 from ..models._delfly import lateral, longitudinal
 from ..models._greybox import GreyBoxModel
 from ..simulation._averaged import averaged

@@ -11,7 +11,8 @@ import numpy as np
 
 from .._errors import InputError
 from ..data._flight import Flight
-from ..estimate._output_error import FitResult, fit
+from ..estimate._fit import fit
+from ..estimate._problem import FitResult
 from ..models._fourier import estimate_phase_offset, fourier_least_squares, fourier_model
 from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._errors import FitDivergedError
 from ..estimate._local import refit_local_affine
-from ..estimate._output_error import fit
+from ..estimate._fit import fit
 from ..models._greybox import GreyBoxModel
 from ..simulation._buckets import pad_experiment
 from ..simulation._experiment import Experiment

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._errors import InputError
 from ..data._flight import Flight
-from ..estimate._output_error import FitResult
+from ..estimate._problem import FitResult
 from ..models._fourier import fourier_model
 from ..validate._harmonics import nonharmonic_share
 from ._flapping import fit_fourier, fourier_flight_fit

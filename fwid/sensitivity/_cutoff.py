@@ -12,7 +12,8 @@ from jaxtyping import Array, Float
 
 from ..data._flight import Flight
 from ..estimate._gauss_newton import NoiseModel, ml_cost
-from ..estimate._output_error import FitResult, _free_layout, _merge_batch, _raw_residuals
+from ..estimate._output_error import raw_residuals
+from ..estimate._problem import FitResult, free_layout, merge_batch
 from ..models._greybox import GreyBoxModel
 from ..simulation._averaged import averaged
 from ..simulation._experiment import Experiment
@@ -45,7 +46,7 @@ def _cutoff_setup(model, flight, fit_result, noise):
         raise ValueError(f"noise must be 'relaxed' or 'fixed', not {noise!r}")
     names = tuple(fit_result.names)
     n_local = len(flights) if (len(flights) > 1 and any("@" in k for k in names)) else 0
-    layout = tuple(_free_layout(model, n_local)[2])
+    layout = tuple(free_layout(model, n_local)[2])
     if layout != names:
         raise ValueError(f"the fit's parameters {names} are not those of fitting "
                          f"{model.name!r} to {len(flights)} flight(s): {layout}")
@@ -84,7 +85,7 @@ def cutoff_cost(
 
     def L(theta, cutoff):
         batch = _stack_traced([averaged(f, base, cutoff, noise_cutoff, edge) for f in flights])
-        v = _raw_residuals(base, _merge_batch(base, theta, n_local), batch)
+        v = raw_residuals(base, merge_batch(base, theta, n_local), batch)
         if Rinv is not None:
             return 0.5 * jnp.einsum("...i,ij,...j->", v, Rinv, v)
         noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)  # as fwid.fit

@@ -1,7 +1,7 @@
 """Real flight data: the ATTAS test cases of Jategaonkar's book, fitted with fwid.
 
 The reference values are the book's output-error estimates as published in its companion
-software (see benchmarks/attas_data.py for where they come from). fwid integrates each
+software (see benchmarks/cases/attas.py for where they come from). fwid integrates each
 manoeuvre from its own first sample and relaxes a full R (Eq. 11); the book shares one
 initial state and uses a diagonal R, which moves Z0 and Zq by about 0.5 %, well inside 2 %.
 """
@@ -14,7 +14,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
-from attas_data import (  # noqa: E402
+from cases.attas import (  # noqa: E402
     TC3_BOOK_OEM_L0_CORRECTED,
     TC3_NAMES,
     TC11_BOOK_OEM,

@@ -21,9 +21,9 @@ from fwid.estimate._riccati import care, discretise, steady_state_gain
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
-import _tc02  # noqa: E402
-import _tc04  # noqa: E402
-from _textbook import fwid_model  # noqa: E402
+from cases import tc02  # noqa: E402
+from cases import tc04  # noqa: E402
+from cases.textbook import fwid_model  # noqa: E402
 
 TRUE = dict(Lp=-4.0, Lr=1.0, Lda=-10.0, Np=-0.5, Nr=-0.8, Ndr=-3.0)
 BOOK_FEM = dict(CD0=0.122688, CDa=0.320055, CLa=4.32785, Cma=-0.967854, Cmq=-34.7098,
@@ -141,28 +141,28 @@ def test_filter_error_recovers_a_model_flown_in_turbulence():
     assert np.all(np.asarray(fem.F) > 0) and fem.innovations.shape == (1, e.n, 3)
 
 
-@pytest.mark.skipif(not _tc04.CASE.available(), reason="textbook data not found (../shared)")
+@pytest.mark.skipif(not tc04.CASE.available(), reason="textbook data not found (../shared)")
 def test_tc04_filter_error_within_five_percent_of_the_book():
-    r = _tc04.records()[0]
+    r = tc04.records()[0]
     e = fwid.Experiment(r["t"], r["u"], r["z"], x0=r["x0"])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = fwid.fit(fwid_model(_tc04.CASE), e, start="model", method="filter-error",
-                       process_noise=_tc04.F0)
+        res = fwid.fit(fwid_model(tc04.CASE), e, start="model", method="filter-error",
+                       process_noise=tc04.F0)
     assert bool(res.converged)
     for k, v in BOOK_FEM.items():
         assert abs(float(res.theta[res.names.index(k)]) / v - 1) < 0.05, k
 
 
-@pytest.mark.skipif(not _tc02.CASE.available(), reason="textbook data not found (../shared)")
+@pytest.mark.skipif(not tc02.CASE.available(), reason="textbook data not found (../shared)")
 def test_tc02_filter_error_converges_stable_with_white_innovations():
-    r = _tc02.records()[0]
+    r = tc02.records()[0]
     e = fwid.Experiment(r["t"], r["u"], r["z"], x0=r["x0"])
-    model = fwid_model(_tc02.CASE)
+    model = fwid_model(tc02.CASE)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = fwid.fit(model, e, start="model", method="filter-error",
-                       process_noise=_tc02.F0)
+                       process_noise=tc02.F0)
     assert bool(res.converged) and res.white, res.whiteness
     A, _ = res.model.state_matrices(res.model.params, {})
     assert np.all(np.linalg.eigvals(np.asarray(A)).real < 0)

@@ -18,8 +18,8 @@ from fwid.estimate._stability import instability_warning
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
-import _tc08  # noqa: E402
-from _textbook import fwid_model  # noqa: E402
+from cases import tc08  # noqa: E402
+from cases.textbook import fwid_model  # noqa: E402
 
 U0 = 40.0
 TRUE = dict(Zw=-1.2, Zde=-5.0, Mw=0.25, Mq=-3.0, Mde=-10.0)  # eigenvalues -5.1, +0.9
@@ -85,19 +85,19 @@ def test_unknown_method_and_options_are_errors():
         fwid.fit(_model(), e, segments=4)
 
 
-@pytest.mark.skipif(not _tc08.CASE.available(), reason="textbook data not found (../shared)")
+@pytest.mark.skipif(not tc08.CASE.available(), reason="textbook data not found (../shared)")
 def test_tc08_unstable_aircraft_within_one_percent_of_the_truth():
     """The book's start values and model (Zq fixed, as its mDefCase08): Zw, Mw, Mq within 1 %
     of the values the data were simulated with, eigenvalues -5.825 and +0.693 within 2 %."""
-    r = _tc08.records()[0]
+    r = tc08.records()[0]
     e = fwid.Experiment(r["t"], r["u"], r["z"], x0=r["x0"])
-    model = fwid_model(_tc08.CASE).with_free(_tc08.FREE)
+    model = fwid_model(tc08.CASE).with_free(tc08.FREE)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = fwid.fit(model, e, start="model", method="multiple-shooting")
     assert bool(res.converged)
     est = {k: float(v) for k, v in res.model.params.items()}
-    for k, true in _tc08.TRUE.items():
+    for k, true in tc08.TRUE.items():
         assert abs(est[k] / true - 1) < 0.01, (k, est[k], true)
-    eig = _tc08.eigenvalues(est)
-    assert np.all(np.abs(eig / np.array(_tc08.TRUE_EIGENVALUES) - 1) < 0.02), eig
+    eig = tc08.eigenvalues(est)
+    assert np.all(np.abs(eig / np.array(tc08.TRUE_EIGENVALUES) - 1) < 0.02), eig

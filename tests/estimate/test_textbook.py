@@ -1,12 +1,12 @@
 """fwid's defaults reproduce the textbook output-error cases (issue 13).
 
-FVSysID test cases 1 and 4 and SIDPAC's Twin Otter `tlonss` demo (benchmarks/_tc01.py,
-_tc04.py, _twin_otter.py), fitted with `fwid.fit` and its DEFAULT settings, against the
-independent numpy/scipy reference (benchmarks/_baseline.py: numpy RK4, scipy least_squares,
+FVSysID test cases 1 and 4 and SIDPAC's Twin Otter `tlonss` demo (benchmarks/tc01.py,
+tc04.py, twin_otter.py), fitted with `fwid.fit` and its DEFAULT settings, against the
+independent numpy/scipy reference (benchmarks/peers/scipy_output_error.py: numpy RK4, scipy least_squares,
 diagonal R relaxed between solves) computed here from the same data. Tolerance: 0.5 % per
 parameter; for a parameter whose reference is smaller than its own standard deviation (a
 relative difference means nothing there) 5 % of that standard deviation
-(benchmarks/_textbook.py, `agreement`). Skipped when ../shared/flightdata is absent.
+(benchmarks/cases/textbook.py, `agreement`). Skipped when ../shared/flightdata is absent.
 """
 
 import sys
@@ -17,16 +17,16 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
-import _tc01  # noqa: E402
-import _tc04  # noqa: E402
-import _twin_otter  # noqa: E402
-from _textbook import (  # noqa: E402
+from cases import tc01  # noqa: E402
+from cases import tc04  # noqa: E402
+from cases import twin_otter  # noqa: E402
+from cases.textbook import (  # noqa: E402
     agreement, as_table, data_root, fit_fwid, fit_reference, fwid_table)
 
-CASES = {"tc01": lambda: _tc01.CASE, "tc04_oem": lambda: _tc04.CASE,
-         "twin_otter_tlonss": _twin_otter.case}
-HAVE = {"tc01": _tc01.CASE.available(), "tc04_oem": _tc04.CASE.available(),
-        "twin_otter_tlonss": (data_root() / _twin_otter.FILE).exists()}
+CASES = {"tc01": lambda: tc01.CASE, "tc04_oem": lambda: tc04.CASE,
+         "twin_otter_tlonss": twin_otter.case}
+HAVE = {"tc01": tc01.CASE.available(), "tc04_oem": tc04.CASE.available(),
+        "twin_otter_tlonss": (data_root() / twin_otter.FILE).exists()}
 
 
 @pytest.mark.parametrize("key", list(CASES))

@@ -1,6 +1,6 @@
 """fwid's outputs and sensitivities against an independent computation: the hand-written
 `lax.scan` RK4 of `benchmarks/simd.py` on arrays with the flights innermost (no fwid, no
-diffrax, the model written out again in `benchmarks/_problem.py`)."""
+diffrax, the model written out again in `benchmarks/cases/delfly_speed.py`)."""
 
 import sys
 from pathlib import Path
@@ -18,7 +18,7 @@ BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
 def test_sensitivities_equal_the_flights_innermost_scan():
     sys.path.insert(0, str(BENCH))
     try:
-        import _problem as P
+        import cases.delfly_speed as P
         from simd import sensitivities_inner
     finally:
         sys.path.remove(str(BENCH))

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from _textbook import Case, data_root
+from .textbook import Case, data_root
 
 NAMES = tuple(f"p{i}" for i in range(1, 10))
 FILE = "sidpac_v1_twin_otter/oe_lon_example.mat"

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from _textbook import Case, data_root
+from .textbook import Case, data_root
 
 NAMES = ("Lp", "Lr", "Lda", "Ldr", "Lv", "Np", "Nr", "Nda", "Ndr", "Nv",
          "Yp", "Yr", "Yda", "Ydr", "Yv", "BX1", "BX2", "BY1", "BY2", "BY3", "BY4", "BY5")

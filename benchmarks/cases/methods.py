@@ -10,10 +10,10 @@ import warnings
 
 import numpy as np
 
-import _tc02
-import _tc04
-import _tc08
-from _textbook import fwid_model
+from . import tc02
+from . import tc04
+from . import tc08
+from .textbook import fwid_model
 
 #: The book's filter-error estimates of TC04 (chapter 7 ``mDefCase04``, ``parFEM``).
 TC04_FEM_BOOK = dict(CD0=0.122688, CDa=0.320055, CLa=4.32785, Cma=-0.967854, Cmq=-34.7098,
@@ -52,34 +52,34 @@ def _timed_fit(model, exps, **kw):
 def tc08() -> dict:
     """FVSysID TC08, the unstable aircraft, by multiple shooting from the book's start values
     (Zq fixed as the book); the errors from the values the data were simulated with."""
-    case = _tc08.CASE
-    model = fwid_model(case).with_free(_tc08.FREE)
+    case = tc08.CASE
+    model = fwid_model(case).with_free(tc08.FREE)
     exps = _experiments(case)
     res, wall = _timed_fit(model, exps, method="multiple-shooting")
     out = _table(model, res, case.names)
     est = {k: v["value"] for k, v in out.items()}
-    eig = _tc08.eigenvalues(est)
+    eig = tc08.eigenvalues(est)
     oem, oem_wall = _timed_fit(model, exps)
     oem_est = {**est, **dict(zip(oem.names, map(float, oem.theta)))}
     out["_fwid"] = {
         "method": "multiple-shooting", "converged": bool(res.converged),
         "steps": int(res.steps), "noise": res.noise, "wall_s": wall,
-        "eigenvalues": eig.tolist(), "true_eigenvalues": list(_tc08.TRUE_EIGENVALUES),
-        "error_pct": {k: 100 * (est[k] / v - 1) for k, v in _tc08.TRUE.items()},
-        "eigenvalue_error_pct": (100 * (eig / np.array(_tc08.TRUE_EIGENVALUES) - 1)).tolist(),
+        "eigenvalues": eig.tolist(), "true_eigenvalues": list(tc08.TRUE_EIGENVALUES),
+        "error_pct": {k: 100 * (est[k] / v - 1) for k, v in tc08.TRUE.items()},
+        "eigenvalue_error_pct": (100 * (eig / np.array(tc08.TRUE_EIGENVALUES) - 1)).tolist(),
         "warnings": list(res.warnings),
         "plain_output_error": {
             "converged": bool(oem.converged), "noise": oem.noise,
             "values": {k: oem_est[k] for k in case.names},
-            "eigenvalues": _tc08.eigenvalues(oem_est).tolist(), "wall_s": oem_wall,
+            "eigenvalues": tc08.eigenvalues(oem_est).tolist(), "wall_s": oem_wall,
             "warnings": list(oem.warnings)},
     }
     print(f"\n{case.title}: multiple shooting "
           f"{'converged' if bool(res.converged) else 'NOT converged'} in {int(res.steps)} "
           f"steps, {wall:.1f} s; eigenvalues {eig.round(4)}")
-    for k, v in _tc08.TRUE.items():
+    for k, v in tc08.TRUE.items():
         print(f"  {k:<5}{est[k]:>10.5g}  true {v:>9.5g}  {100 * (est[k] / v - 1):+.2f} %")
-    print(f"  plain output error: eigenvalues {_tc08.eigenvalues(oem_est).round(4)}")
+    print(f"  plain output error: eigenvalues {tc08.eigenvalues(oem_est).round(4)}")
     return out
 
 
@@ -105,9 +105,9 @@ def _fem_entry(case, res, wall, names):
 def tc04_fem() -> dict:
     """FVSysID TC04 (HFB-320) by the filter-error method from the book's start values (F too),
     against the book's filter-error estimates."""
-    case = _tc04.CASE
+    case = tc04.CASE
     res, wall = _timed_fit(fwid_model(case), _experiments(case), method="filter-error",
-                           process_noise=_tc04.F0)
+                           process_noise=tc04.F0)
     out = _fem_entry(case, res, wall, case.names)
     diff = {k: 100 * (out[k]["value"] / v - 1) for k, v in TC04_FEM_BOOK.items()}
     out["_published"] = {"values": TC04_FEM_BOOK, "diff_pct": diff,
@@ -121,9 +121,9 @@ def tc04_fem() -> dict:
 def tc02_fem() -> dict:
     """FVSysID TC02 (lateral-directional in turbulence) by the filter-error method from the
     book's start values."""
-    case = _tc02.CASE
+    case = tc02.CASE
     res, wall = _timed_fit(fwid_model(case), _experiments(case), method="filter-error",
-                           process_noise=_tc02.F0)
+                           process_noise=tc02.F0)
     return _fem_entry(case, res, wall, case.names)
 
 
@@ -133,11 +133,11 @@ def speed_fem_vs_oem(repeats: int = 5) -> dict:
     with its default `noise="auto"` (a full-R fit, then a diagonal-R one: two fits) and
     with `noise="diagonal"` (one fit, the R the filter error uses); the ratios against the
     default."""
-    case = _tc04.CASE
+    case = tc04.CASE
     model, exps = fwid_model(case), _experiments(case)
     out = {}
     for key, kw in (("oem", {}), ("oem_diagonal", dict(noise="diagonal")),
-                    ("fem", dict(method="filter-error", process_noise=_tc04.F0))):
+                    ("fem", dict(method="filter-error", process_noise=tc04.F0))):
         _, first = _timed_fit(model, exps, **kw)
         warm = [_timed_fit(model, exps, **kw)[1] for _ in range(repeats)]
         out[key] = {"first_s": first, "warm_median_s": float(np.median(warm))}

@@ -2,7 +2,7 @@
 
 R. V. Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., AIAA 2015, chapter 4
 (output-error method), test case 1; the model is the book's Eqs. (4.90)-(4.91), restated here
-from the book's model definition (``mDefCase01``; see `attas_data.py` for where the book's
+from the book's model definition (``mDefCase01``; see `cases/attas.py` for where the book's
 files were read):
 
     states  x = [p, r]; inputs u = [da, dr, beta] (beta measured, used as an input)
@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from _textbook import Case, data_root
-from attas_data import D2R
+from .textbook import Case, data_root
+from .attas import D2R
 
 NAMES = ("Lp", "Lr", "Lda", "Ldr", "Lb", "Np", "Nr", "Nda", "Ndr", "Nb",
          "Yp", "Yr", "Yda", "Ydr", "Yb", "BX1", "BX2", "BY1", "BY2", "BY3", "BY4", "BY5")

@@ -16,14 +16,14 @@ from the book's model definition (``mDefCase04``):
 
 Data: ``hfb320_1_10.asc`` as one record (uniform 0.1 s), x0 fixed at the book's values.
 Start values: the book's. ``PUBLISHED``: the book software's own estimates (chapter 7
-``mDefCase04``, variable ``parOEM``; see `attas_data.py` for where the files were read).
+``mDefCase04``, variable ``parOEM``; see `cases/attas.py` for where the files were read).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from _textbook import Case, data_root
+from .textbook import Case, data_root
 
 NAMES = ("CD0", "CDV", "CDa", "CL0", "CLV", "CLa", "Cm0", "CmV", "Cma", "Cmq", "Cmde")
 THETA0 = np.array([5.67516e-03, 7.72612e-03, 6.74256e-01, -3.18267e-01, 2.60317e-01,

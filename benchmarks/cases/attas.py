@@ -66,7 +66,7 @@ DT = 0.04
 # book uses to tune its recursive filters; they are NOT the OEM residual variances (those are
 # several times larger, e.g. TC11 about [2.7e-6, 7.9e-6]) and are not a check on R.
 #
-# Reproduction with benchmarks/_baseline.py (diagonal R as in the book's costfun_oem.m):
+# Reproduction with benchmarks/peers/scipy_output_error.py (diagonal R as in the book's costfun_oem.m):
 # * TC11, book's initial states (both segments start from fAttasElv1's first sample,
 #   load_attas_tc11(x0_mode="book")): all 8 values reproduced to <= 0.001 %.
 # * TC3, book's two records (load_attas_tc3()): 11 of 12 values to <= 0.004 %; L0 comes out
@@ -125,7 +125,7 @@ def default_folder() -> Path:
     env = os.environ.get("FWID_FLIGHTDATA")
     if env:
         return Path(env)
-    return (Path(__file__).resolve().parent / ".." / ".." / "shared" / "flightdata"
+    return (Path(__file__).resolve().parents[2] / "shared" / "flightdata"
             / "jategaonkar_fvsysid2").resolve()
 
 

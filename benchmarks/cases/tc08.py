@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from _textbook import Case, data_root
+from .textbook import Case, data_root
 
 NAMES = ("Zw", "Zq", "Zde", "Mw", "Mq", "Mde")
 FREE = ("Zw", "Zde", "Mw", "Mq", "Mde")  # Zq fixed at its start value, as the book

@@ -3,7 +3,7 @@
 A [`Case`][] holds a model written once for numpy and JAX (``xdot(x, u, p, c, xp)``,
 ``obs(x, u, p, c, xp)``), its parameter names and start values, and the records it is fitted
 to. [`fit_fwid`][] fits it with fwid's public API and default settings, as a user would;
-[`fit_reference`][] fits it with the independent numpy/scipy estimator of `_baseline.py`
+[`fit_reference`][] fits it with the independent numpy/scipy estimator of `peers/scipy_output_error.py`
 (RK4, ``scipy.optimize.least_squares``, diagonal R relaxed between solves, as FVSysID's
 ``ml_oem`` and SIDPAC's ``oe``).
 
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _baseline import batch_of, fit_output_error
+from peers.scipy_output_error import batch_of, fit_output_error
 
 
 def data_root() -> Path:
@@ -28,7 +28,7 @@ def data_root() -> Path:
     env = os.environ.get("FWID_FLIGHTDATA_ROOT")
     if env:
         return Path(env)
-    return (Path(__file__).resolve().parent / ".." / ".." / "shared" / "flightdata").resolve()
+    return (Path(__file__).resolve().parents[2] / "shared" / "flightdata").resolve()
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ jax.config.update("jax_enable_x64", True)  # fwid.fit needs float64; say so in t
 
 from fwid.models import TABLE1  # noqa: E402
 
-from _jax_reference import rk4_scan  # noqa: E402
+from peers.jax_output_error import rk4_scan  # noqa: E402
 
 DT = 0.005  # 200 Hz
 N_SAMPLES = 900  # 4.5 s
@@ -47,7 +47,7 @@ def vehicle_constants():
         vals = {k: float(d[k] if isinstance(d, dict) else getattr(d, k)) for k in CONST_KEYS}
         return vals, "fwid.synth.DELFLY"
     except Exception:
-        return dict(DELFLY), "benchmarks/_problem.py DELFLY (fwid.synth.DELFLY not available)"
+        return dict(DELFLY), "benchmarks/cases/delfly_speed.py DELFLY (fwid.synth.DELFLY not available)"
 
 
 def lon_f_jax(x, u, th, c):
