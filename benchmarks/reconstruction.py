@@ -89,9 +89,9 @@ def run(cmd: list[str], timeout: float = 1800.0) -> tuple[float, subprocess.Comp
     return time.perf_counter() - t0, proc
 
 
-def fwid_reconstruct(raw: Path, out: Path, form: str) -> tuple[float, subprocess.CompletedProcess]:
+def fwid_reconstruct(raw: Path, out: Path, form: str, timeout: float = 1800.0) -> tuple[float, subprocess.CompletedProcess]:
     cmd = [sys.executable, "-m", "fwid.cli", "reconstruct", str(raw), "--out", str(out)]
-    return run(cmd + (["--body", "DelFly"] if form == "motive" else []))
+    return run(cmd + (["--body", "DelFly"] if form == "motive" else []), timeout)
 
 
 def baseline(raw: Path, out: Path) -> tuple[float, subprocess.CompletedProcess]:
@@ -180,7 +180,7 @@ def speed(work: Path, takes: int, duration: float) -> dict:
     cache = work / "jax-cache"  # an empty compilation cache: cold, then warm
     os.environ["FWID_JAX_CACHE"] = str(cache)
     for label in ("fwid_cold", "fwid_warm"):
-        wall, proc = fwid_reconstruct(raw, work / label, "motive")
+        wall, proc = fwid_reconstruct(raw, work / label, "motive", timeout=600.0)
         res[label] = {"wall_s": wall, "rc": proc.returncode}
         if proc.returncode != 0:
             res[label]["error"] = (proc.stderr.strip().splitlines() or ["?"])[-1]
