@@ -7,6 +7,7 @@ from __future__ import annotations
 import platform
 from collections import Counter, defaultdict
 from pathlib import Path
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 #: Verdicts that name no catalogue effect.
@@ -257,7 +258,7 @@ def figure(results, path: Path) -> None:
     fig.legend(handles, [f"{n}+{n} flights" for n in counts], loc="lower center",
                ncol=len(counts), fontsize=8)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, metadata={"Description": _provenance.header(_provenance.provenance())})
     plt.close(fig)
 
 
@@ -284,6 +285,6 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           *near_ties(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
-    stem.with_suffix(".md").write_text(text)
+    stem.with_suffix(".md").write_text(_provenance.markdown(text))
     figure(results, stem.with_suffix(".png"))
     return text

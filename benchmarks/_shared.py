@@ -51,6 +51,8 @@ from cases.delfly_speed import AERO, DT, NAMES, X64_BY_FWID, experiment, lon_f_j
 from peers.jax_output_error import make_fit
 from peers.scipy_output_error import fit_output_error
 
+import _provenance
+
 HERE = Path(__file__).resolve().parent
 PARTS = ("import", "compile", "fit", "figures", "reports")
 
@@ -200,8 +202,8 @@ def write(res, out, md):
     """`res` as JSON to `out`, the Markdown `md` next to it (`.md`), and print `md`."""
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1, default=_jsonable) + "\n")
-    out.with_suffix(".md").write_text(md)
+    out.write_text(_provenance.json_text(res, indent=1, default=_jsonable))
+    out.with_suffix(".md").write_text(_provenance.markdown(md))
     print()
     print(md)
     print(f"wrote {out} and {out.with_suffix('.md')}")

@@ -31,6 +31,7 @@ from cases.attas import (  # noqa: E402
     load_attas_tc3,
     load_attas_tc11,
 )
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 def short_period(x, u, p, c):
@@ -103,7 +104,7 @@ def main(argv=None):
             print(f"{k:<7}{v['value']:>12.5g}{v['std']:>10.2g}{v['book']:>12.5g}"
                   f"{v['rel_diff_pct']:>8.2f}")
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.json).write_text(_provenance.json_text(out, indent=2))
     print(f"\nwrote {args.json}")
 
 

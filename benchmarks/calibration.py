@@ -21,6 +21,7 @@ import numpy as np
 
 import fwid
 from fwid import synth
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 def oscillatory(eigs):
@@ -73,7 +74,7 @@ def main(argv=None):
               f"{100 * r['oscillatory_mode_rel_error']['median']:.2f} %, max "
               f"{100 * r['oscillatory_mode_rel_error']['max']:.2f} % ({r['seeds']} seeds)")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(results, indent=2) + "\n")
+    Path(args.out).write_text(_provenance.json_text(results, indent=2))
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics",
            "turbulence")
@@ -176,7 +177,7 @@ def main(argv=None):
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "diagnosis.json").write_text(json.dumps({"summary": summary, "results": results},
+    (out / "diagnosis.json").write_text(_provenance.json_text({"summary": summary, "results": results},
                                                    indent=1))
     md = [
         "# fwid diagnose: withheld-effect benchmark",
@@ -200,7 +201,7 @@ def main(argv=None):
         "its correct answer is none)"),
         _summarise(results, args.strengths, args.axes),
     ]
-    (out / "diagnosis.md").write_text("\n".join(md) + "\n")
+    (out / "diagnosis.md").write_text(_provenance.markdown("\n".join(md) + "\n"))
     print("\n".join(md))
 
 

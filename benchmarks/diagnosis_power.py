@@ -43,6 +43,7 @@ import zlib
 from pathlib import Path
 
 import numpy as np
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's fwid first
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -202,7 +203,7 @@ def main(argv=None):
 
     if args.summarise:
         path = Path(args.summarise)
-        results = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        results = _provenance.records(path)
         summarise(results, path.with_suffix(""), note=f"recomputed from {path.name}")
         return
     todo = select(cases(args.half, args.seeds), args.subset, args.limit)
@@ -218,6 +219,7 @@ def main(argv=None):
     results = []
     with open(stem.with_suffix(".jsonl"), "w") as fh, \
             mp.get_context("spawn").Pool(args.workers) as pool:
+        fh.write(_provenance.jsonl_first_line())
         for i, r in enumerate(pool.imap_unordered(run_case, todo), 1):
             results.append(r)
             fh.write(json.dumps(r) + "\n")

@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -173,8 +174,8 @@ def main() -> None:
         f.unlink()
     tmp.rmdir()
     md = markdown(recs, args.flights, load)
-    Path(args.out).write_text(json.dumps(recs, indent=1) + "\n")
-    Path(args.out).with_suffix(".md").write_text(md)
+    Path(args.out).write_text(_provenance.json_text(recs, indent=1))
+    Path(args.out).with_suffix(".md").write_text(_provenance.markdown(md))
     print(md)
 
 

@@ -32,6 +32,7 @@ sys.path.insert(0, str(HERE.parent))  # the fwid of this checkout
 
 import fwid  # noqa: E402
 from fwid import synth  # noqa: E402
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 
 def _osc(ms):
@@ -135,8 +136,8 @@ def main(argv=None):
            "cases": cases}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1) + "\n")
-    out.with_suffix(".md").write_text(markdown(res))
+    out.write_text(_provenance.json_text(res, indent=1))
+    out.with_suffix(".md").write_text(_provenance.markdown(markdown(res)))
     print(markdown(res))
     print(f"wrote {out} and {out.with_suffix('.md')}")
 

@@ -51,6 +51,7 @@ from cases import tc08  # noqa: E402
 from cases import twin_otter  # noqa: E402
 from cases.methods import RUNNERS  # noqa: E402
 from cases.textbook import agreement, as_table, fit_fwid, fit_reference, fwid_table  # noqa: E402
+import _provenance  # noqa: E402  (benchmarks/: the results files' provenance)
 
 CASES = {"tc01": lambda: tc01.CASE, "tc04_oem": lambda: tc04.CASE,
          "twin_otter_tlonss": twin_otter.case}
@@ -114,7 +115,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     out = {k: run_case(k, args.reference) for k in args.cases.split(",")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+    Path(args.json).write_text(_provenance.json_text(out, indent=2))
     print(f"\nwrote {args.json}")
 
 

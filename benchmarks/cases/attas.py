@@ -125,7 +125,7 @@ def default_folder() -> Path:
     env = os.environ.get("FWID_FLIGHTDATA")
     if env:
         return Path(env)
-    return (Path(__file__).resolve().parents[2] / "shared" / "flightdata"
+    return (Path(__file__).resolve().parents[3] / "shared" / "flightdata"
             / "jategaonkar_fvsysid2").resolve()
 
 

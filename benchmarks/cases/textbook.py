@@ -28,7 +28,7 @@ def data_root() -> Path:
     env = os.environ.get("FWID_FLIGHTDATA_ROOT")
     if env:
         return Path(env)
-    return (Path(__file__).resolve().parents[2] / "shared" / "flightdata").resolve()
+    return (Path(__file__).resolve().parents[3] / "shared" / "flightdata").resolve()
 
 
 @dataclass(frozen=True)

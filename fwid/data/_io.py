@@ -132,8 +132,7 @@ def load_flight(
     require: Iterable[str] = (),
     name: str | None = None,
 ) -> Flight:
-    """Read one flight: `NAME.csv`, its optional sidecar `NAME.json`, and the `vehicle.json`
-    beside it.
+    """Read one flight: `NAME.csv`, its optional sidecar `NAME.json` and `vehicle.json`.
 
     The CSV has a header row and comma-separated numbers; every column but `t` goes into
     `Flight.columns` (extra columns are kept; non-numeric extra columns are dropped). The

@@ -196,8 +196,7 @@ def first_input_index(
     frac: float = 0.1,
     min_snr: float = 10.0,
 ) -> int | None:
-    """The first sample of the manoeuvre: where the control input first departs from its
-    initial level.
+    """The first sample of the manoeuvre: where the control input departs from its level.
 
     The input is low-pass smoothed (`smooth_input`: a moving average of about `window`
     seconds, applied twice; when the input ripples, e.g. the ~12 Hz flapping ripple of the

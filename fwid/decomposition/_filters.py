@@ -199,8 +199,9 @@ def lowpass(
     prewarp: bool = True,
     pad: str = "hybrid",
 ) -> Float[Array, "*channels n"]:
-    """Zero-phase Butterworth low-pass along the last axis (the noise filter and the cycle-average
-    of Section III.B).
+    """Zero-phase Butterworth low-pass along the last axis (noise filter, cycle average).
+
+    The noise filter and the cycle-average of Section III.B.
 
     Equivalent, away from the ends, to `scipy.signal.filtfilt` with `scipy.signal.butter(order,
     cutoff, fs=1/dt)` (everywhere, with `pad="odd"` and `padlen=n - 1`): the spectrum is
@@ -242,6 +243,9 @@ def highpass(
     squared magnitude of the order-`N` Butterworth high-pass, i.e. what `scipy.signal.filtfilt` with
     `scipy.signal.butter(order, cutoff, "highpass", fs=1/dt)` gives in steady state. Same arguments
     as [`fwid.decomposition.lowpass`][]. Low-pass plus high-pass is exactly `x`.
+
+    **Arguments:** `x`, `dt`, `cutoff`, `order`, `prewarp`, `pad`: as
+    [`fwid.decomposition.lowpass`][].
 
     **Returns:** the high-passed signal, same shape as `x`.
     """

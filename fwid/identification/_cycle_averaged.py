@@ -26,7 +26,21 @@ MODELS = {"lon": longitudinal, "lat": lateral}
 
 @dataclass(frozen=True, repr=False)
 class Identification:
-    """What [`fwid.identify`][] found: the fit(s), their modes and their metrics."""
+    """What [`fwid.identify`][] found: the fit(s), their modes and their metrics.
+
+    **Fields:**
+
+    - `model`: the identified [`fwid.GreyBoxModel`][] (the mean of the per-flight estimates,
+      or the joint estimate).
+    - `flights`: the estimation flights' names.
+    - `fits`: the [`fwid.FitResult`][] of each flight (one for a joint fit).
+    - `estimation`, `validation`: a [`fwid.FlightFit`][] per estimation and held-out flight.
+    - `joint`: whether one parameter set was fitted to all flights.
+    - `consts`: the constants the modes are computed with (vehicle and trim).
+
+    `fit` is the first (or joint) fit, `eigenvalues` and `modes` those of `model`, and
+    `state_space()` the linear system at the trim ([`fwid.StateSpace`][]).
+    """
 
     model: GreyBoxModel
     flights: list[str]
@@ -117,8 +131,21 @@ def identify(
     gets its own fit (the paper's practice) and the summary model is the mean of their
     estimates; with `joint`, one parameter set is fitted to all flights together, each with
     its own initial state, trim and bias terms. Validation flights are simulated with the
-    summary model, their bias terms re-estimated. `start` is passed to [`fwid.fit`][]:
-    `"least-squares"`, `"model"` (the model's values) or a model whose values to start from.
+    summary model, their bias terms re-estimated.
+
+    **Arguments:**
+
+    - `flights`: the estimation flights ([`fwid.load_flights`][]).
+    - `model`: `"lon"`, `"lat"` or a [`fwid.GreyBoxModel`][].
+    - `validate`: held-out flights to score the model on.
+    - `joint`: one parameter set for all flights (default: one fit per flight).
+    - `cutoff`: the split between the cycle-averaged and the flapping part [Hz] (default 5).
+    - `noise_cutoff`: the noise low-pass applied first [Hz] (default 40).
+    - `start`: passed to [`fwid.fit`][]: `"least-squares"`, `"model"` (the model's values)
+      or a model whose values to start from.
+    - `progress`: print a line per stage.
+
+    **Returns:** an [`fwid.Identification`][].
     """
     model = get_model(model)
     flights = list(flights)

@@ -20,7 +20,19 @@ from ..validate._metrics import fit_metrics
 
 @dataclass(frozen=True, repr=False)
 class FlightFit:
-    """A model's response on one flight, next to the measurements (Figures 6, 7, 9, 10)."""
+    """A model's response on one flight, next to the measurements (Figures 6, 7, 9, 10).
+
+    **Fields:**
+
+    - `name`: the flight's name.
+    - `t`: the time [s], shape `(n,)`.
+    - `inputs`, `measured`, `simulated`: the inputs, the measured and the simulated outputs
+      by name, perturbations from the trim.
+    - `forces_measured`, `forces_simulated`: the reconstructed and the model's loads by name
+      (empty when the model has no force outputs).
+    - `metrics`: [`fwid.fit_metrics`][] of the outputs.
+    - `local_params`: the flight-specific parameters (bias terms) used on this flight.
+    """
 
     name: str
     t: np.ndarray
@@ -78,6 +90,15 @@ def evaluate(
     With `refit_local`, the model's flight-specific parameters (the bias terms) are first
     re-estimated on this flight, everything else held at its value: a validation flight has
     its own trim errors, which the biases exist to absorb.
+
+    **Arguments:**
+
+    - `model`: the [`fwid.GreyBoxModel`][] to score.
+    - `exp`: the [`fwid.Experiment`][] of the flight.
+    - `name`: the flight's name.
+    - `refit_local`: re-estimate the bias terms on this flight first (default `True`).
+
+    **Returns:** a [`fwid.FlightFit`][].
     """
     local = {}
     n = exp.n

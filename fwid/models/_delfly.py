@@ -79,6 +79,15 @@ def longitudinal(params: dict | None = None, *, biases: bool = True) -> GreyBoxM
     States and outputs `q u w theta` (perturbations from trim), input `de`; parameters
     `Xq Xu Xw Xde Zq Zu Zw Zde Mq Mu Mw Mde` and the biases `bq bu bw btheta`. Constants:
     `mass Iy g u0 w0 theta0` (from `vehicle.json` and the trim).
+
+    **Arguments:**
+
+    - `params`: values of the parameters by name, overriding the defaults (the paper's
+      Table 1 values, biases 0).
+    - `biases`: estimate the bias terms (the paper's unit input; flight-specific) with the
+      aerodynamic parameters; `False` holds them at their values.
+
+    **Returns:** a [`fwid.GreyBoxModel`][].
     """
     p = dict(TABLE1)
     p.update({b: 0.0 for b in LON_BIASES})
@@ -97,6 +106,15 @@ def lateral(params: dict | None = None, *, biases: bool = True) -> GreyBoxModel:
     States and outputs `p r v phi` (perturbations), input `dr`; parameters
     `Yp Yr Yv Ydr Lp Lr Lv Ldr Np Nr Nv Ndr` and the biases `bp br bv bphi`. Constants:
     `mass Ix Iz Ixz g u0 w0 theta0`. Heading follows from Eq. (9), see [`fwid.heading_rate`][].
+
+    **Arguments:**
+
+    - `params`: values of the parameters by name, overriding the defaults (the paper's
+      Table 4 values, biases 0).
+    - `biases`: estimate the bias terms (flight-specific) with the aerodynamic parameters;
+      `False` holds them at their values.
+
+    **Returns:** a [`fwid.GreyBoxModel`][].
     """
     p = dict(TABLE4)
     p.update({b: 0.0 for b in LAT_BIASES})
@@ -110,5 +128,13 @@ def lateral(params: dict | None = None, *, biases: bool = True) -> GreyBoxModel:
 
 
 def heading_rate(r, theta0):
-    """Linearised yaw kinematics, Eq. (9): `dpsi/dt = dr / cos(theta0)` (about `phi0 = r0 = 0`)."""
+    """Linearised yaw kinematics, Eq. (9): `dpsi/dt = dr / cos(theta0)` (about `phi0 = r0 = 0`).
+
+    **Arguments:**
+
+    - `r`: the yaw rate perturbation [rad/s].
+    - `theta0`: the trim pitch angle [rad].
+
+    **Returns:** the heading rate `dpsi/dt` [rad/s].
+    """
     return r / jnp.cos(theta0)

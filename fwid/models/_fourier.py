@@ -185,11 +185,18 @@ def shift_phase(
     params: Mapping[str, float], offset: float, outputs: Sequence[str] = LON_OUTPUTS,
     harmonics: int = 3,
 ) -> dict[str, float]:
-    """The coefficients of the same series advanced by `offset` in phase.
+    """The coefficients of the same Fourier series advanced by `offset` in phase (Section V.A).
 
     `a_n sin(n(phi + d)) + b_n cos(n(phi + d)) = a'_n sin(n phi) + b'_n cos(n phi)` with
     `a'_n = a_n cos(n d) - b_n sin(n d)`, `b'_n = a_n sin(n d) + b_n cos(n d)`: the model
-    aligned with a flight that starts `offset` radians later in the stroke (Section V.A).
+    aligned with a flight that starts `offset` radians later in the stroke.
+
+    **Arguments:**
+
+    - `params`: the coefficients `ax1, bx1, ...` by name (Eq. 12).
+    - `offset`: the phase advance `d` [rad].
+    - `outputs`: the outputs whose series are rotated (default `X Z M`).
+    - `harmonics`: the number of harmonics (default 3).
 
     **Returns:** the rotated coefficients by name.
     """

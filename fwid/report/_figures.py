@@ -33,11 +33,20 @@ def _scaled_input(u, target):
 
 
 def plot_flight_fit(flight_fit, *, path: str | Path | None = None, title: str = "") -> Figure:
-    """States and forces, measured vs model, with the scaled input (Figures 6, 7, 9, 10), and
-    under each signal its residual (measured - model), where the model misses.
+    """States and forces of one flight, measured against the model (Figures 6, 7, 9, 10).
 
-    States are perturbations from the trim, angles and rates in degrees for reading (the
-    reports and tables are in radians); forces and moments in N and N m.
+    The scaled input is drawn with every signal, and under each signal its residual
+    (measured - model), where the model misses. States are perturbations from the trim,
+    angles and rates in degrees for reading (the reports and tables are in radians); forces
+    and moments in N and N m.
+
+    **Arguments:**
+
+    - `flight_fit`: a [`fwid.FlightFit`][] (e.g. `Identification.validation[0]`).
+    - `path`: where to save the figure (PNG); not saved when `None`.
+    - `title`: the figure's title.
+
+    **Returns:** the `matplotlib.figure.Figure`.
     """
     names = list(flight_fit.measured)
     forces = list(flight_fit.forces_measured)
@@ -98,10 +107,22 @@ _MARKERS = ("x", "+", "o", "s", "^", "v", "D", "*")
 def plot_poles(eigs: Sequence[np.ndarray], labels: Sequence[str] | None = None, *,
                path: str | Path | None = None, title: str = "",
                highlight: int | None = None) -> Figure:
-    """Eigenvalues of several models in one s-plane (Figures 8 and 11), with labelled rays of
-    constant damping ratio and circles of constant natural frequency; every model its own
-    colour and marker (legible with 16 flights); `highlight`: the index of a model drawn
-    larger and black (e.g. the joint fit beside the individual ones)."""
+    """Eigenvalues of several models in one s-plane (Figures 8 and 11).
+
+    Labelled rays of constant damping ratio and circles of constant natural frequency; every
+    model its own colour and marker (legible with 16 flights).
+
+    **Arguments:**
+
+    - `eigs`: one array of eigenvalues per model.
+    - `labels`: a label per model (for the legend).
+    - `path`: where to save the figure (PNG); not saved when `None`.
+    - `title`: the figure's title.
+    - `highlight`: the index of a model drawn larger and black (e.g. the joint fit beside
+      the individual ones).
+
+    **Returns:** the `matplotlib.figure.Figure`.
+    """
     fig = Figure(figsize=(7, 5.2), layout="constrained")
     ax = fig.subplots()
     allev = np.concatenate([np.asarray(e) for e in eigs]) if len(eigs) else np.zeros(1)

@@ -120,7 +120,16 @@ def add_validation(report: dict, validation) -> dict:
 
 
 def identification_report(ident) -> dict:
-    """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict."""
+    """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict.
+
+    **Arguments:**
+
+    - `ident`: an [`fwid.Identification`][].
+
+    **Returns:** a dict with `model`, `flights`, `parameters`, `eigenvalues`, `modes`,
+    `metrics`, `state_space` and, with several flights, `per_flight` and `modes_spread`;
+    write it with [`fwid.write_json`][].
+    """
     model = ident.model
     eigs = ident.eigenvalues
     report = {

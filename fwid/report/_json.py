@@ -57,8 +57,17 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 def write_json(path: str | Path, obj) -> Path:
-    """Write `obj` as JSON atomically ([`write_text`][]); numpy and JAX values become
-    numbers and lists, NaN and infinities `null`."""
+    """Write `obj` as JSON atomically: a failed write leaves an earlier file untouched.
+
+    numpy and JAX values become numbers and lists; NaN and infinities become `null`.
+
+    **Arguments:**
+
+    - `path`: the file to write.
+    - `obj`: a JSON-able value (dicts, lists, numbers, strings, numpy and JAX arrays).
+
+    **Returns:** the path written.
+    """
     return write_text(path, json.dumps(_clean(obj), indent=2) + "\n")
 
 

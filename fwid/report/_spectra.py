@@ -225,11 +225,17 @@ def plot_steady_vs_manoeuvre(
     path: str | Path | None = None,
     title: str = "",
 ) -> Figure:
-    """The flapping model fitted to steady flight and to a manoeuvre, side by side
-    (Figures 14 and 12): amplitude spectra of the data and the model for each output.
+    """The flapping model fitted to steady flight and to a manoeuvre, side by side (Figures 14, 12).
 
-    **Arguments:** `steady`, `manoeuvre`: the two [`fwid.FlightFit`][]s; `f` the flapping
-    frequency; `path` where to save it.
+    Amplitude spectra of the data and the model for each output.
+
+    **Arguments:**
+
+    - `steady`, `manoeuvre`: the two [`fwid.FlightFit`][]s.
+    - `f`: the flapping frequency [Hz], for the harmonics' marks.
+    - `harmonics`: how many harmonics to mark (default 3).
+    - `path`: where to save the figure (PNG); not saved when `None`.
+    - `title`: the figure's title.
 
     **Returns:** the `matplotlib.figure.Figure`.
     """

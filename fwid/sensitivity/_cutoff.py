@@ -63,9 +63,11 @@ def cutoff_cost(
     noise_cutoff: float | None = 40.0,
     edge: float = 0.2,
 ) -> Callable[[Float[Array, " p"], Float[Array, ""]], Float[Array, ""]]:
-    """The output-error cost as a pure function `L(theta, cutoff)` of the free parameters and
-    the split cut-off: inside it the flights are cycle-averaged at `cutoff`
-    ([`fwid.cycle_averaged`][]) and cut to [`fwid.Experiment`][]s as [`fwid.identify`][] does.
+    """The output-error cost as a pure function `L(theta, cutoff)`, for its derivatives.
+
+    `theta` are the free parameters and `cutoff` the split cut-off: inside `L` the flights
+    are cycle-averaged at `cutoff` ([`fwid.cycle_averaged`][]) and cut to
+    [`fwid.Experiment`][]s as [`fwid.identify`][] does.
 
     - `noise="relaxed"`: Eq. (10) with R from Eq. (11) at `theta` (plus [`fwid.fit`][]'s tiny
       floor), i.e. `N/2 ln det R(theta, cutoff) + const`, whose stationary point is what
@@ -76,7 +78,13 @@ def cutoff_cost(
     `theta` is laid out as `fit_result.theta` (`fit_result.names`); the parameters that were
     not estimated keep `fit_result.model`'s values. Jit-able, and differentiable in both
     arguments in forward mode (`jax.jacfwd`; reverse mode does not go through the diffrax
-    simulation). Arguments as [`fwid.estimate_sensitivity_to_cutoff`][].
+    simulation).
+
+    **Arguments:** as [`fwid.estimate_sensitivity_to_cutoff`][]: `model`, `flight` (one or
+    several), `fit_result` (the fit at the nominal cut-off), `noise` (`"relaxed"` or
+    `"fixed"`), `noise_cutoff` [Hz] and `edge` (the seconds dropped at each end).
+
+    **Returns:** the function `L(theta, cutoff)` -> scalar.
     """
     flights, _, n_local, base = _cutoff_setup(model, flight, fit_result, noise)
     R = np.asarray(fit_result.R)
@@ -104,8 +112,9 @@ def estimate_sensitivity_to_cutoff(
     noise_cutoff: float | None = 40.0,
     edge: float = 0.2,
 ) -> dict:
-    """How the output-error estimates move with the split cut-off (5 Hz, Sec. III.B):
-    `d theta_hat / d cutoff` by the implicit function theorem.
+    """How the output-error estimates move with the split cut-off (5 Hz, Sec. III.B).
+
+    `d theta_hat / d cutoff`, by the implicit function theorem.
 
     The estimate is a stationary point of the cost, `g(theta, c) = dL/dtheta = 0`, where the
     data (the cycle-averaged outputs `z`, inputs `u` and initial state `x0`) depend on the

@@ -37,8 +37,10 @@ def eigenvalue_sensitivity(
     *,
     names: Sequence[str] | None = None,
 ) -> dict:
-    """Derivatives of the eigenvalues of `A = df/dx` and of the modes' natural frequency and
-    damping with respect to the parameters and the trim/mass constants (Tables 3 and 6).
+    """Derivatives of the eigenvalues and modes with respect to parameters and constants.
+
+    The eigenvalues of `A = df/dx` and the modes' natural frequency and damping (Tables 3
+    and 6), differentiated with respect to the parameters and the trim/mass constants.
 
     For the DelFly's longitudinal model (Eq. 7) `A` depends on the aerodynamic derivatives
     (`Xq ... Mw`, divided by `mass` or `Iy`) and on the trim (`u0`, `w0`, `theta0`, with `g`).
@@ -47,7 +49,7 @@ def eigenvalue_sensitivity(
 
     $$\\frac{d\\lambda_i}{dp} = \\frac{w_i^H (dA/dp)\\, v_i}{w_i^H v_i},$$
 
-    with `dA/dp` from `jax.jacfwd` of [`fwid.GreyBoxModel.state_matrices`][] (`w_i^H` are the
+    with `dA/dp` from `jax.jacfwd` of `state_matrices` of [`fwid.GreyBoxModel`][] (`w_i^H` are the
     rows of `V^{-1}`). For an oscillatory pair with `lambda = -zeta wn + i wn sqrt(1 - zeta^2)`:
     `d wn = Re(conj(lambda) d lambda) / wn` and `d zeta = -(d Re lambda) / wn - Re(lambda)
     d wn / wn^2`; for an aperiodic mode `d tau = d lambda / lambda^2` (`tau = -1/lambda`). The

@@ -64,8 +64,9 @@ def metric_sensitivity(
     R: Float[Array, "ny ny"] | None = None,
     names: Sequence[str] | None = None,
 ) -> dict:
-    """Gradients of the fit cost (Eq. 10) and of the per-output fit metrics with respect to
-    the parameters.
+    """Gradients of the fit cost (Eq. 10) and of the per-output fit metrics.
+
+    With respect to the parameters (or the names given).
 
     The cost is the output-error negative log-likelihood of Eq. (10),
 

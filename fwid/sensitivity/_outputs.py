@@ -20,8 +20,9 @@ def output_sensitivity(
     wrt: str = "params",
     names: Sequence[str] | None = None,
 ) -> dict[str, Float[Array, "n ny"]]:
-    """Derivatives of the simulated outputs `y(t_k)` with respect to the parameters, the
-    per-flight constants or the initial state.
+    """Derivatives of the simulated outputs `y(t_k)`, by forward-mode autodiff.
+
+    With respect to the parameters, the per-flight constants or the initial state.
 
     `y` is the output of the grey-box model (Eq. 7 for the DelFly's longitudinal dynamics)
     integrated by fixed-step RK4 at the data's sample times (Sec. IV.B), exactly what

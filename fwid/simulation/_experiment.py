@@ -69,9 +69,12 @@ def experiment(flight, model, *, x0: str = "first") -> Experiment:
     forces are taken when the flight has them (for the least-squares start).
 
     **Arguments:**
+
     - `flight`: the flight (usually cycle-averaged first, see [`fwid.cycle_averaged`][]).
     - `model`: the [`fwid.GreyBoxModel`][].
     - `x0`: `"first"` takes the initial state from the first sample of the measured states.
+
+    **Returns:** an [`fwid.Experiment`][].
     """
     cols = list(model.inputs) + list(model.outputs)
     if not model.outputs_are_states:
@@ -124,6 +127,13 @@ def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Exper
 
     Time continues on the same uniform grid, inputs hold their last value and the mask is 0
     on the padding, so a padded sample never enters a cost or a metric.
+
+    **Arguments:**
+
+    - `exps`: the experiments, all of one model.
+    - `n`: the common length (default: the longest experiment's).
+
+    **Returns:** one [`fwid.Experiment`][] whose arrays have a leading batch axis.
     """
     n = max(e.n for e in exps) if n is None else n
     keys = sorted(set().union(*(e.consts for e in exps)))
@@ -157,7 +167,14 @@ def stack_experiments(exps: Sequence[Experiment], n: int | None = None) -> Exper
 
 
 def unstack_experiments(batch: Experiment) -> list[Experiment]:
-    """The inverse of [`fwid.stack_experiments`][] (padding removed)."""
+    """The inverse of [`fwid.stack_experiments`][]: one experiment per batch entry.
+
+    **Arguments:**
+
+    - `batch`: an [`fwid.Experiment`][] with a leading batch axis.
+
+    **Returns:** the list of experiments, padding removed.
+    """
     out = []
     for i in range(batch.t.shape[0]):
         n = int(np.asarray(batch.mask[i]).sum())

@@ -25,6 +25,8 @@ class RK4(diffrax.AbstractSolver):
     forward-mode Jacobian about 2.5x more. The numbers are those of the tableau
     `c = (0, 1/2, 1/2, 1)`, `b = (1/6, 1/3, 1/3, 1/6)`; there is no error estimate (fixed
     steps only). Dense output is the cubic Hermite interpolant on the first and last stage.
+
+    **Arguments:** none (`fwid.RK4()`); use it as any diffrax solver.
     """
 
     term_structure: ClassVar = diffrax.AbstractTerm

@@ -141,7 +141,18 @@ def _outputs(model, xs, u, params, consts):
 
 
 def simulate_forces(model: GreyBoxModel, xs, exp: Experiment, params: Params | None = None):
-    """The model's aerodynamic forces and moments (Eqs. 1-6) along a simulated trajectory."""
+    """The model's aerodynamic forces and moments (Eqs. 1-6) along a simulated trajectory.
+
+    **Arguments:**
+
+    - `model`: a [`fwid.GreyBoxModel`][] with a force model.
+    - `xs`: the simulated states, shape `(n, nx)` (from [`fwid.simulate`][]).
+    - `exp`: the [`fwid.Experiment`][] that was simulated (its inputs and constants).
+    - `params`: parameter values by name (default: the model's).
+
+    **Returns:** the forces and moments along the trajectory, shape `(n, nf)`, in the order of
+    the model's force outputs (N, N m).
+    """
     params = model.params if params is None else params
     if model.forces is None:
         raise ValueError(f"model {model.name!r} has no force model")

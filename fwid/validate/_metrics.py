@@ -11,12 +11,20 @@ from jaxtyping import Array, Float
 def fit_metrics(
     z: Float[Array, "n ny"], y: Float[Array, "n ny"], names: Sequence[str]
 ) -> dict[str, dict[str, float]]:
-    """Output correlation, R^2, RMS and RMS as % of the measured range, per output.
+    """Output correlation, R^2, RMS and RMS as % of the measured range, per output (Tables 2, 5, 8).
 
     - `corr`: Pearson correlation of measured and model output.
     - `r2`: `1 - sum (z - y)^2 / sum (z - mean z)^2` (can be negative on validation data).
     - `rms`: root mean square of `z - y`, in the output's unit.
     - `rms_pct`: `100 rms / (max z - min z)`.
+
+    **Arguments:**
+
+    - `z`: the measured outputs, shape `(n, ny)`.
+    - `y`: the model's outputs, shape `(n, ny)`.
+    - `names`: the outputs' names, `ny` of them.
+
+    **Returns:** `{name: {"corr", "r2", "rms", "rms_pct"}}`.
     """
     z = np.asarray(z, dtype=float)
     y = np.asarray(y, dtype=float)

@@ -12,12 +12,20 @@ from ..models._greybox import GreyBoxModel
 
 def eigenvalues(model: GreyBoxModel, consts: Mapping, params=None, *, x0=None,
                 u0=None) -> Float[np.ndarray, " nx"]:
-    """Eigenvalues of `A = df/dx` (the linearised Eq. 7; Tables 3 and 6), sorted by
-    imaginary part then real part.
+    """Eigenvalues of `A = df/dx` (the linearised Eq. 7; Tables 3 and 6).
 
-    `A` is taken at `x0`, `u0` (default `x = 0, u = 0`, see
-    [`fwid.GreyBoxModel.state_matrices`][]): the trim for fwid's DelFly models, whose states
-    and inputs are perturbations from it; give the trim point for a model in absolute states.
+    `A` is taken at `x0`, `u0` (default `x = 0, u = 0`, see `state_matrices` of
+    [`fwid.GreyBoxModel`][]): the trim for fwid's DelFly models, whose states and inputs are
+    perturbations from it; give the trim point for a model in absolute states.
+
+    **Arguments:**
+
+    - `model`: a [`fwid.GreyBoxModel`][].
+    - `consts`: its constants (vehicle and trim).
+    - `params`: parameter values (default: the model's).
+    - `x0`, `u0`: the linearisation point (default zero).
+
+    **Returns:** the eigenvalues, shape `(nx,)`, sorted by imaginary part, then real part.
     """
     A, _ = model.state_matrices(model.params if params is None else params, consts, x0, u0)
     ev = np.linalg.eigvals(np.asarray(A))
@@ -25,12 +33,21 @@ def eigenvalues(model: GreyBoxModel, consts: Mapping, params=None, *, x0=None,
 
 
 def modes(eigs) -> list[dict]:
-    """Each mode's kind and numbers: oscillatory modes (one per conjugate pair) give the
-    natural frequency `wn` [rad/s] and `natural_freq_hz` (`wn / 2 pi`), the damping ratio
-    `zeta`, the damped frequency `damped_freq_hz` (`|Im lambda| / 2 pi`; also kept under its
-    old name `freq_hz`) and the period of the damped oscillation;
-    aperiodic modes give the time constant `tau = -1/lambda` (or the time to double when
-    unstable)."""
+    """Each mode's kind and numbers, from a model's eigenvalues (Tables 3 and 6).
+
+    Oscillatory modes (one per conjugate pair) give the natural frequency `wn` [rad/s] and
+    `natural_freq_hz` (`wn / 2 pi`), the damping ratio `zeta`, the damped frequency
+    `damped_freq_hz` (`|Im lambda| / 2 pi`; also kept under its old name `freq_hz`) and the
+    period of the damped oscillation; aperiodic modes give the time constant
+    `tau = -1/lambda` (or the time to double when unstable).
+
+    **Arguments:**
+
+    - `eigs`: the eigenvalues ([`fwid.eigenvalues`][]).
+
+    **Returns:** a list of dicts, one per mode, each with its `kind` (`"oscillatory"` or
+    `"aperiodic"`) and the numbers above.
+    """
     eigs = np.asarray(eigs, dtype=complex)
     out = []
     used = np.zeros(len(eigs), bool)

@@ -14,9 +14,19 @@ from ..models._greybox import GreyBoxModel
 
 @dataclass(frozen=True)
 class StateSpace:
-    """A linear system with named states, inputs and outputs (`A (nx, nx)`, `B (nx, nu)`,
-    `C (ny, nx)`, `D (ny, nu)`, SI units: rad, rad/s, m/s). Bias terms (constant offsets of
-    the aerodynamic model, flight-specific) are not part of the linear system."""
+    """A linear system with named states, inputs and outputs: `x' = A x + B u`, `y = C x + D u`.
+
+    SI units (rad, rad/s, m/s), perturbations from the trim. Bias terms (constant offsets of
+    the aerodynamic model, flight-specific) are not part of the linear system.
+
+    **Fields:**
+
+    - `A (nx, nx)`, `B (nx, nu)`, `C (ny, nx)`, `D (ny, nu)`: the matrices (numpy arrays).
+    - `states`, `inputs`, `outputs`: their names, in the matrices' order.
+
+    `to_scipy()`, `to_control()` and `to_json()` / `from_json()` carry it out of fwid;
+    `poles()` gives the eigenvalues of `A`.
+    """
 
     A: np.ndarray
     B: np.ndarray
@@ -67,8 +77,19 @@ class StateSpace:
 
 
 def state_space(model: GreyBoxModel, consts: Mapping[str, float], params=None) -> StateSpace:
-    """Linearise `model` (its `f` and output equation `h`) at the trim, as
-    [`fwid.eigenvalues`][] does: `A = df/dx`, `B = df/du`, `C = dh/dx`, `D = dh/du`."""
+    """Linearise `model` at the trim: `A = df/dx`, `B = df/du`, `C = dh/dx`, `D = dh/du`.
+
+    `f` is the model's state equation and `h` its output equation, taken at `x = 0, u = 0`
+    as [`fwid.eigenvalues`][] does.
+
+    **Arguments:**
+
+    - `model`: a [`fwid.GreyBoxModel`][].
+    - `consts`: its constants (vehicle and trim), e.g. `Identification.consts`.
+    - `params`: parameter values overriding the model's (default: the model's).
+
+    **Returns:** a [`fwid.StateSpace`][].
+    """
     p = model.params if params is None else {**model.params, **params}
     A, B = model.state_matrices(p, consts)  # both convert to float arrays (as_arrays)
     C, D = model.output_matrices(p, consts)
