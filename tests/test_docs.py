@@ -66,7 +66,7 @@ def test_site_builds_strict_offline(tmp_path):
 #: The stages whose public docstrings are in the anchors' form (diffrax's): a one-line
 #: summary, then `**Arguments:**` and `**Returns:**` (a class: its `**Fields:**` or
 #: `**Arguments:**`).
-ANCHOR_FORM = ("data", "decomposition", "models", "simulation", "validate", "sensitivity",
+ANCHOR_FORM = ("data", "reconstruction", "decomposition", "models", "simulation", "validate", "sensitivity",
                "report", "identification")
 
 

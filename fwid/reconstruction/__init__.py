@@ -4,7 +4,7 @@ autopilot logs to the section-1 flights every other stage reads.
 - Reading (numpy, no JAX): the form is told by the first line (`_read.py`, [`fwid.read_raw`][]):
   the fwid raw CSV (`_fwid_raw.py`) and the OptiTrack Motive CSV export with its autopilot
   log `NAME.onboard.csv` (`_motive.py`); the checks they share (uniform time base, unit
-  quaternions, dropouts no longer than `max_dropout`) and the [`RawTake`][] (`_raw.py`);
+  quaternions, dropouts no longer than `max_dropout`) and the `RawTake` (`_raw.py`);
   rotations, quaternion sign continuity, y-up / z-up to north-east-down (`_rotations.py`).
 - Smoothing (JAX): a linear Kalman filter and Rauch-Tung-Striebel smoother with
   `lax.scan` (`_kalman.py`) on a kinematic model per axis, white jerk plus the flapping

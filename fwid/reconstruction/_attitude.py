@@ -64,9 +64,11 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
     - `dt`: sample step (s);
     - `gyro` `(B, N, 3)`, `gyro_mask` `(B, N)`: the gyro on the same time base, or None;
     - `start` `(B, N, 3, 3)`: a nominal to start from (default: the record, gaps filled);
-    - `params`: noise parameters per problem (`B * 3`, axis-major per take) to reuse.
+    - `params`: noise parameters per problem (`B * 3`, take-major) to reuse; with a gyro,
+      its noise is still searched (the motion's levels kept);
+    - `passes`: passes of the iterated smoother.
 
-    **Returns:** an [`Attitude`][].
+    **Returns:** an `Attitude`.
     """
     B, N = tracked.shape
     Rm = quat_to_matrix(np.where(tracked[..., None], quat, [1.0, 0, 0, 0]))
@@ -85,6 +87,8 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
     g3 = gm3 = None
     if gyro is not None:
         g3, gm3 = axes(np.asarray(gyro, float)), np.repeat(gyro_mask, 3, axis=0)
+    if gyro is not None and params is not None:
+        params = [(p[0], p[1], None) for p in params]
     for _ in range(passes):
         wn = nominal_rates(nom, dt)
         z = np.where(tracked[..., None], log_so3(np.swapaxes(nom, -1, -2) @ Rm), 0.0)

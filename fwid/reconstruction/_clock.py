@@ -6,7 +6,8 @@ the attitude smoothed without it, in two steps:
 1. coarse, over every lag that leaves at least `min_overlap` seconds in common: the
    normalised cross-correlation (summed over p q r) of both signals low-passed below
    `COARSE_CUTOFF` times the flapping frequency (the cycle-averaged manoeuvre: one peak,
-   not one per flapping cycle), on the take's sample grid;
+   not one per flapping cycle), on the take's sample grid; of the peaks within `TIE` of the
+   best correlation (a manoeuvre repeated), the one with the longest overlap;
 2. fine, to a fraction of a sample: the offset that minimises the squared difference of the
    full-band gyro (spline-interpolated at `t - offset`, less its mean difference per axis:
    the bias) and the smoothed rates, within 1.5 samples of the coarse one.
@@ -24,6 +25,8 @@ from scipy import interpolate, optimize, signal
 
 #: Low-pass of the coarse search, as a fraction of the flapping frequency.
 COARSE_CUTOFF = 0.35
+#: Coarse correlations this close to the best are a tie, given to the longer overlap.
+TIE = 0.01
 #: Shortest overlap (s) of take and log accepted.
 MIN_OVERLAP = 2.0
 
@@ -66,7 +69,7 @@ def _xcorr(a: np.ndarray, b: np.ndarray, min_n: int):
     n = signal.correlate(ones_a, ones_b, mode="full", method="fft")
     lags = signal.correlation_lags(len(a), len(b), mode="full")
     val = num / np.sqrt(np.maximum(ea, 1e-30) * np.maximum(eb, 1e-30))
-    return lags, np.where(np.round(n) >= min_n, val, -np.inf)
+    return lags, np.where(np.round(n) >= min_n, val, -np.inf), n
 
 
 def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarray,
@@ -81,7 +84,7 @@ def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarra
     - `given`: an offset to use instead of searching (its quality is still measured);
     - `min_overlap`: the shortest overlap (s) a lag may leave.
 
-    **Returns:** a [`ClockOffset`][], or None when no lag leaves `min_overlap` in common.
+    **Returns:** a `ClockOffset`, or None when no lag leaves `min_overlap` in common.
     """
     dt = (t[-1] - t[0]) / (len(t) - 1)
     spline = interpolate.CubicSpline(t_log, lowpass(t_log, gyro, 0.45 / dt), axis=0,
@@ -91,10 +94,16 @@ def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarra
         cut = COARSE_CUTOFF * (f0 if np.isfinite(f0) and f0 > 0 else 12.0)
         a = lowpass(t, w - w.mean(0), cut)
         b = lowpass(grid, spline(grid) - spline(grid).mean(0), cut)
-        lags, val = _xcorr(a, b, int(min_overlap / dt))
+        lags, val, n = _xcorr(a, b, int(min_overlap / dt))
         if not np.isfinite(val).any():
             return None
-        coarse = t[0] - grid[0] + lags[int(np.argmax(val))] * dt
+        # a near-tie (a repeated manoeuvre) goes to the lag with the longer overlap
+        peaks, _ = signal.find_peaks(np.where(np.isfinite(val), val, -2.0))
+        best = int(np.argmax(val))
+        near = [p for p in peaks if val[p] >= val[best] - TIE]
+        if near:
+            best = max(near, key=lambda p: (n[p], val[p]))
+        coarse = t[0] - grid[0] + lags[best] * dt
     else:
         coarse = given
 

@@ -18,7 +18,7 @@ _EULER = ("phi", "theta", "psi", "roll", "pitch", "yaw")
 
 def read_fwid_raw(path: str, lines: list[str], frame: str = "ned",
                   max_dropout: float = MAX_DROPOUT, name: str | None = None) -> RawTake:
-    """Read a fwid raw CSV (its `lines`) into a [`RawTake`][] in north-east-down.
+    """Read a fwid raw CSV (its `lines`) into a `RawTake` in north-east-down.
 
     **Arguments:**
     - `path`: the file (for messages); `lines`: its text lines;

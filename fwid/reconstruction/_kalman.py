@@ -28,7 +28,7 @@ def _update(x, P, h, z, r, valid):
     x = jnp.where(valid, x + K[:, None] * nu[None, :], x)
     P = jnp.where(valid, P - jnp.outer(K, Ph), P)
     P = 0.5 * (P + P.T)
-    return x, P, S, nu
+    return x, P, S, nu, K
 
 
 def filter_stats(F, Q, H, R, z, mask, u, m0, P0):
@@ -44,7 +44,7 @@ def filter_stats(F, Q, H, R, z, mask, u, m0, P0):
         x, P, acc = carry
         h_k, z_k, mk, u_k, k = inp
         for i in range(h_k.shape[0]):
-            x, P, S, nu = _update(x, P, h_k[i], z_k[i], R[i], mk[i])
+            x, P, S, nu, _ = _update(x, P, h_k[i], z_k[i], R[i], mk[i])
             use = mk[i] & (k >= BURN_IN)
             acc = acc + jnp.where(use, jnp.array([c * jnp.log(S), jnp.sum(nu**2) / S, c]), 0.0)
         x = F @ x + u_k
@@ -65,30 +65,39 @@ def concentrated_loglik(acc: Float[Array, "... 3"]) -> Float[Array, "..."]:
 
 
 def smooth(F, Q, H, R, z, mask, u, m0, P0):
-    """Rauch-Tung-Striebel smoothed means `(N, n, c)` and the innovation statistics
-    (`filter_stats`), arguments as there."""
+    """Smoothed means `(N, n, c)` and the innovation statistics (`filter_stats`), arguments
+    as there.
+
+    The Rauch-Tung-Striebel smoother's means in the modified Bryson-Frazier form (Bierman):
+    the backward pass carries an adjoint `lam` with `x_smooth = x_pred + P_pred lam` through
+    each scalar update (`lam <- h nu / S + (I - h K^T) lam`) and each step (`lam <- F^T lam`);
+    no matrix is inverted (the means of the gains `P F^T P_pred^-1`, at a fraction of the cost).
+    """
     c = z.shape[-1]
 
     def forward(carry, inp):
         x, P, acc = carry
         h_k, z_k, mk, u_k, k = inp
+        x_pred, P_pred, Ks, Ws = x, P, [], []
         for i in range(h_k.shape[0]):
-            x, P, S, nu = _update(x, P, h_k[i], z_k[i], R[i], mk[i])
+            x, P, S, nu, K = _update(x, P, h_k[i], z_k[i], R[i], mk[i])
             use = mk[i] & (k >= BURN_IN)
             acc = acc + jnp.where(use, jnp.array([c * jnp.log(S), jnp.sum(nu**2) / S, c]), 0.0)
-        xp = F @ x + u_k
-        Pp = F @ P @ F.T + Q
-        G = jnp.linalg.solve(Pp + 1e-300 * jnp.eye(Pp.shape[0]), F @ P).T  # P F^T Pp^-1
-        return (xp, Pp, acc), (x, xp, G)
+            Ks.append(jnp.where(mk[i], K, 0.0))
+            Ws.append(jnp.where(mk[i], nu / S, 0.0))
+        return ((F @ x + u_k, F @ P @ F.T + Q, acc),
+                (x_pred, P_pred, jnp.stack(Ks), jnp.stack(Ws)))
 
     ks = jnp.arange(z.shape[0])
-    (_, _, acc), (xf, xp, G) = jax.lax.scan(forward, (m0, P0, jnp.zeros(3)), (H, z, mask, u, ks))
+    (_, _, acc), (xp, Pp, K, W) = jax.lax.scan(forward, (m0, P0, jnp.zeros(3)),
+                                               (H, z, mask, u, ks))
 
-    def backward(xs_next, inp):
-        xf_k, xp_k, G_k = inp
-        xs = xf_k + G_k @ (xs_next - xp_k)
-        return xs, xs
+    def backward(lam_next, inp):
+        xp_k, Pp_k, K_k, W_k, h_k = inp
+        lam = F.T @ lam_next
+        for i in reversed(range(h_k.shape[0])):
+            lam = lam + h_k[i][:, None] * (W_k[i] - K_k[i] @ lam)[None, :]
+        return lam, xp_k + Pp_k @ lam
 
-    _, xs = jax.lax.scan(backward, xf[-1], (xf[:-1], xp[:-1], G[:-1]), reverse=True)
-    return jnp.concatenate([xs, xf[-1:]], 0), acc
-
+    _, xs = jax.lax.scan(backward, jnp.zeros_like(m0), (xp, Pp, K, W, H), reverse=True)
+    return xs, acc

@@ -32,7 +32,7 @@ def settings(line: str) -> dict[str, str]:
 
 def read_motive(path: str, lines: list[str], body: str | None = None, frame: str = "y-up",
                 onboard: str | None = None, max_dropout: float = MAX_DROPOUT) -> RawTake:
-    """Read a Motive CSV export and its autopilot log into a [`RawTake`][] in
+    """Read a Motive CSV export and its autopilot log into a `RawTake` in
     north-east-down.
 
     **Arguments:**

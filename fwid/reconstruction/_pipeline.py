@@ -61,10 +61,13 @@ def _stack(xs):
     return np.stack(xs)
 
 
-def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None):
-    """Smooth the attitude of several takes, vmapped by length."""
+def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, params=None,
+              passes=None):
+    """Smooth the attitude of several takes, vmapped by length (`passes`: per take)."""
     out = [None] * len(takes)
-    for idx in _groups(range(len(takes)), lambda i: (len(tracked[i]), takes[i].dt)):
+    key = (lambda i: (len(tracked[i]), round(takes[i].dt, 12), None if passes is None
+                      else passes[i]))
+    for idx in _groups(range(len(takes)), key):
         dt = takes[idx[0]].dt
         ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
         kw = {}
@@ -72,6 +75,10 @@ def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None):
             kw = {"gyro": _stack([gyros[i] for i in idx]), "gyro_mask": _stack([gmasks[i] for i in idx])}
         if starts is not None:
             kw["start"] = _stack([starts[i] for i in idx])
+        if params is not None:
+            kw["params"] = [p for i in idx for p in params[i]]
+        if passes is not None:
+            kw["passes"] = passes[idx[0]]
         att = smooth_attitude(_stack([quats[i] for i in idx]), _stack([tracked[i] for i in idx]),
                               _stack(ph), _stack(om), dt, **kw)
         for j, i in enumerate(idx):
@@ -82,7 +89,7 @@ def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None):
 
 def _translation(takes, pos, tracked, fs):
     out = [None] * len(takes)
-    for idx in _groups(range(len(takes)), lambda i: (len(tracked[i]), takes[i].dt)):
+    for idx in _groups(range(len(takes)), lambda i: (len(tracked[i]), round(takes[i].dt, 12))):
         dt = takes[idx[0]].dt
         ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
         sm = smooth_batch(_stack([pos[i] for i in idx]), _stack([tracked[i] for i in idx]),
@@ -126,8 +133,10 @@ def _cut(take: RawTake, clock, min_overlap):
 def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onboard=None,
                 clock_offset: float | None = None, max_dropout: float = MAX_DROPOUT,
                 min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None) -> Reconstruction:
-    """Raw takes to section-1 flights (CONTRACTS section 5): smoothed states and the loads of
-    the full nonlinear rigid-body equations.
+    """Raw takes to section-1 flights (CONTRACTS section 5), smoothed and with their loads.
+
+    The states come from the smoother, the loads from the full nonlinear rigid-body
+    equations; a take that fails is reported and the others go on.
 
     **Arguments:**
     - `paths`: raw takes (files, or folders of them): fwid raw CSVs or Motive CSV exports;
@@ -138,7 +147,9 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     - `vehicle`: a `vehicle.json` path or its dict (default: the one beside each take);
     - `progress`: called with a one-line message per take.
 
-    **Returns:** a [`fwid.reconstruction.Reconstruction`][]: the flights and the failures.
+    **Returns:** a `fwid.reconstruction.Reconstruction`: `flights` (each a
+    `ReconstructedFlight`: `columns`, `entry` of `reconstruction.json`, ...) and `failures`
+    (`(path, one-line message)`).
     """
     files = raw_files(paths)
     if onboard is not None and len(files) > 1:
@@ -156,7 +167,9 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     takes = [t for _, t, _, _ in ok]
     fs = [t.controls["f"] if t.controls is not None else
           np.full(len(t.t), np.median(t.onboard.columns["f"])) for t in takes]
-    att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs)
+    # one pass where the gyro's pass follows (it starts from this one's attitude), else two
+    att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
+                     passes=[1 if t.onboard is not None else 2 for t in takes])
     flights, stage = [None] * len(ok), []
     for i, (f, take, veh, vpath) in enumerate(ok):
         try:
@@ -168,9 +181,12 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
             clock = find_offset(take.t, att0[i].w, log.t, gyro, float(np.median(log.columns["f"])),
                                 given=clock_offset, min_overlap=min_overlap)
             if clock is None:
+                at = ("any clock offset" if clock_offset is None
+                      else f"the clock offset {clock_offset:g} s given")
                 raise FlightDataError(
                     f"{take.path}: take and autopilot log {log.path} overlap by less than "
-                    f"{min_overlap:g} s at any clock offset; give the log of this take")
+                    f"{min_overlap:g} s at {at}; give the log of this take"
+                    + ("" if clock_offset is None else " or the right --clock-offset"))
             s, cols = _cut(take, clock, min_overlap)
             stage.append((i, s, cols, clock, att0[i]))
         except FwidError as e:
@@ -184,7 +200,8 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
                      [c["f"] for _, _, c, _, _ in with_gyro],
                      gyros=[np.stack([c[k] for k in "pqr"], 1) for _, _, c, _, _ in with_gyro],
                      gmasks=[np.ones(len(c["f"]), bool) for _, _, c, _, _ in with_gyro],
-                     starts=[a.R[s] for _, s, _, _, a in with_gyro])
+                     starts=[a.R[s] for _, s, _, _, a in with_gyro],
+                     params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
     final_att = {st[0]: a for st, a in zip(with_gyro, att1)}
     trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
                          [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage])

@@ -42,7 +42,7 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     - `onboard`: the autopilot's log of a Motive take (default `NAME.onboard.csv` beside it);
     - `max_dropout`: the longest gap in the tracking (s) that is bridged.
 
-    **Returns:** a [`fwid.reconstruction.RawTake`][]. Raises a [`fwid.FlightDataError`][]
+    **Returns:** a `fwid.reconstruction.RawTake`. Raises a [`fwid.FlightDataError`][]
     naming the file, the line or time and the fix for every input that cannot be used.
     """
     if frame is not None and frame not in FRAMES:

@@ -6,6 +6,7 @@ bandwidth `f_h` of the flapping coefficients and (with a gyro) the gyro's noise 
 the attitude's are chosen on a grid (`_model.CUTOFFS`, ...) by the innovations'
 log-likelihood, with the overall noise scale concentrated out (it is `mean(nu^2 / S)`);
 the likelihood is evaluated on at most `ML_WINDOW` samples from the middle of the take.
+The problems are split over the CPU devices (one per core, `fwid._jax_setup`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from . import _model as mdl
 
 #: Samples used to choose the noise levels (from the middle of a take).
-ML_WINDOW = 2000
+ML_WINDOW = 1000
 #: Largest memory (bytes) of the stored smoother gains of one vmapped call.
 GAIN_BYTES = 2e8
 
@@ -37,6 +38,23 @@ def _fns():
         _JIT["grid"] = jax.jit(lambda *a: concentrated_loglik(stats(*a)))
         _JIT["smooth"] = jax.jit(jax.vmap(smooth, in_axes=(None, 0, 0, 0, 0, 0, 0, 0, None)))
     return _JIT
+
+
+def _spread(*arrays):
+    """The arrays (batch first) on every CPU device, split along the batch (padded with
+    copies of the last problem to a multiple of the device count): XLA then runs each
+    device's share of the vmapped loop on its own core. Returns the arrays and the batch."""
+    import jax
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+    M = arrays[0].shape[0]
+    devices = jax.devices()
+    if len(devices) < 2 or M < 2:
+        return [jax.numpy.asarray(a) for a in arrays], M
+    pad = (-M) % len(devices)
+    sharding = NamedSharding(Mesh(np.array(devices), ("b",)), PartitionSpec("b"))
+    out = [np.concatenate([a, np.repeat(a[-1:], pad, 0)]) if pad else a for a in arrays]
+    return [jax.device_put(a, sharding) for a in out], M
 
 
 class Smoothed(NamedTuple):
@@ -66,9 +84,10 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     - `u` `(M, N, c)`: known input of the first state per step (the attitude's nominal
       increment), or None;
     - `scale`: the measurement variance guessed, for the diffuse prior;
-    - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search.
+    - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search;
+      with `gyro_ratio` None, only the gyro's noise is searched.
 
-    **Returns:** a [`Smoothed`][].
+    **Returns:** a `Smoothed`.
     """
     import jax.numpy as jnp
 
@@ -97,33 +116,37 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
         qj, qh = mdl.intensities(dt, fc, fh, w0)
         return mdl.process_noise(dt, qj, qh, bias), np.array([1.0, ratio**2][:m_meas])
 
-    if params is None:
-        grid = list(itertools.product(mdl.CUTOFFS, mdl.COEFF_BANDWIDTHS,
-                                      mdl.GYRO_RATIOS if bias else (1.0,)))
+    if params is None or any(p[2] is None for p in params):
+        if params is None:
+            grid = [list(itertools.product(mdl.CUTOFFS, mdl.COEFF_BANDWIDTHS,
+                                           mdl.GYRO_RATIOS if bias else (1.0,)))] * M
+        else:  # the motion's levels known (from the attitude alone): the gyro's noise only
+            grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
         lo = max(0, (N - ML_WINDOW) // 2)
         win = slice(lo, min(N, lo + ML_WINDOW))
-        Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in grid] for w0 in omega0])
-        Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid])
+        Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
+        Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
+        if any(gm != grid[0] for gm in grid):  # gyro ratios only: the same for every problem
+            assert all([g for *_, g in gm] == [g for *_, g in grid[0]] for gm in grid)
         m0w = m0.copy()
         fw = np.argmax(mask[:, win], axis=1)
         m0w[:, 0, :] = z[:, win][np.arange(M), fw]
-        ll = np.asarray(fns["grid"](jnp.asarray(F), jnp.asarray(Qs), jnp.asarray(H[:, win]),
-                                    jnp.asarray(Rs), jnp.asarray(Z[:, win]),
-                                    jnp.asarray(MK[:, win]), jnp.asarray(U[:, win]),
-                                    jnp.asarray(m0w), jnp.asarray(P0)))
+        (Qs, Hw, Zw, MKw, Uw, m0w), _ = _spread(Qs, H[:, win], Z[:, win], MK[:, win],
+                                                  U[:, win], m0w)
+        ll = np.asarray(fns["grid"](jnp.asarray(F), Qs, Hw, jnp.asarray(Rs), Zw, MKw, Uw, m0w,
+                                    jnp.asarray(P0)))[:M]
         best = np.argmax(np.where(np.isfinite(ll), ll, -np.inf), axis=1)
-        params = [grid[b] for b in best]
+        params = [gm[b] for gm, b in zip(grid, best)]
     Q = np.stack([noise(fc, fh, w0, g)[0] for (fc, fh, g), w0 in zip(params, omega0)])
     R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
-    chunk = max(1, int(GAIN_BYTES // (N * n * n * 8 * 3)))
+    chunk = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))
     xs, acc = [], []
     for a in range(0, M, chunk):
         s = slice(a, a + chunk)
-        x, st = fns["smooth"](jnp.asarray(F), jnp.asarray(Q[s]), jnp.asarray(H[s]),
-                              jnp.asarray(R[s]), jnp.asarray(Z[s]), jnp.asarray(MK[s]),
-                              jnp.asarray(U[s]), jnp.asarray(m0[s]), jnp.asarray(P0))
-        xs.append(np.asarray(x))
-        acc.append(np.asarray(st))
+        (Qc, Hc, Rc, Zc, MKc, Uc, m0c), m = _spread(Q[s], H[s], R[s], Z[s], MK[s], U[s], m0[s])
+        x, st = fns["smooth"](jnp.asarray(F), Qc, Hc, Rc, Zc, MKc, Uc, m0c, jnp.asarray(P0))
+        xs.append(np.asarray(x)[:m])
+        acc.append(np.asarray(st)[:m])
     x, acc = np.concatenate(xs), np.concatenate(acc)  # (M, N, n, c), (M, 3)
     s2 = acc[:, 1] / np.maximum(acc[:, 2], 1)  # the concentrated noise scale
     out = {k: np.einsum("mkn,mknc->mkc", rows[k], x) for k in ("pos", "vel", "acc")}

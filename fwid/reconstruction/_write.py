@@ -58,16 +58,21 @@ def flight_csv(columns: dict[str, np.ndarray]) -> str:
 
 
 def write_flight(out_dir, flight) -> Path:
-    """Write one [`ReconstructedFlight`][] as `out_dir/NAME.csv`."""
+    """Write one `ReconstructedFlight` as `out_dir/NAME.csv`."""
     path = Path(out_dir) / f"{flight.name}.csv"
     _atomic(path, flight_csv(flight.columns))
     return path
 
 
 def write_reconstruction(result, out_dir) -> list[Path]:
-    """Write every flight of a [`Reconstruction`][], `vehicle.json` (the flights' own; they
-    must agree) and `reconstruction.json` into `out_dir`; entries already in an existing
-    `reconstruction.json` for other flights are kept.
+    """Write the flights, `vehicle.json` and `reconstruction.json` of a reconstruction.
+
+    Each file is written atomically into `out_dir`; the flights' `vehicle.json` must agree;
+    entries already in an existing `reconstruction.json` for other flights are kept.
+
+    **Arguments:**
+    - `result`: what [`fwid.reconstruct`][] returned;
+    - `out_dir`: the folder (created if needed).
 
     **Returns:** the paths written.
     """

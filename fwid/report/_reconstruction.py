@@ -10,9 +10,11 @@ from matplotlib.figure import Figure
 
 
 def plot_reconstruction(flight, *, path: str | Path | None = None) -> Figure:
-    """Draw one [`fwid.reconstruction.ReconstructedFlight`][]: three columns (position,
-    Euler angles, body rates), recorded (dots) against smoothed (line); the gyro (less its
-    bias) against the smoothed rates; grey bands where the body was lost.
+    """Draw one reconstructed take: recorded against smoothed position, attitude and rates.
+
+    Three columns (position, Euler angles, body rates), recorded (dots) against smoothed
+    (line); the gyro (less its bias) against the smoothed rates; red bands where the body was
+    lost; the clock offset and its quality in the title.
 
     **Arguments:**
     - `flight`: a reconstructed flight;

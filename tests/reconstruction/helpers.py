@@ -26,13 +26,14 @@ class Motion:
         rng = np.random.default_rng(seed)
         self.s, self.flap = scale, flap
         self.ph = rng.uniform(0, 2 * np.pi, 20)
+        self.k = rng.uniform(0.93, 1.07, 20)  # frequencies scaled: no common period
 
     def euler(self, t):
         s, f, ph = self.s, self.flap, self.ph
-        phi = s * (0.5 * np.sin(2 * np.pi * 0.4 * t + ph[0]) + 0.2 * np.sin(2 * np.pi * 1.1 * t + ph[1]))
-        theta = 1.1 + s * (0.35 * np.sin(2 * np.pi * 0.6 * t + ph[2])) + f * (
+        phi = s * (0.5 * np.sin(2 * np.pi * 0.4 * self.k[1] * t + ph[0]) + 0.2 * np.sin(2 * np.pi * 1.1 * self.k[2] * t + ph[1]))
+        theta = 1.1 + s * (0.35 * np.sin(2 * np.pi * 0.6 * self.k[3] * t + ph[2])) + f * (
             3e-3 * np.sin(2 * np.pi * F0 * t + ph[3]) + 1e-3 * np.sin(4 * np.pi * F0 * t + ph[4]))
-        psi = s * (0.9 * t + 0.6 * np.sin(2 * np.pi * 0.3 * t + ph[5]))
+        psi = s * (0.9 * t + 0.6 * np.sin(2 * np.pi * 0.3 * self.k[4] * t + ph[5]))
         return np.stack([phi, theta, psi], -1)
 
     def R(self, t):
@@ -40,9 +41,9 @@ class Motion:
 
     def pos(self, t):
         s, f, ph = self.s, self.flap, self.ph
-        x = 0.8 * t + s * 0.3 * np.sin(2 * np.pi * 0.5 * t + ph[6])
-        y = s * (0.4 * np.sin(2 * np.pi * 0.35 * t + ph[7]))
-        z = -1.0 - 0.3 * t + s * 0.2 * np.sin(2 * np.pi * 0.7 * t + ph[8])
+        x = 0.8 * t + s * 0.3 * np.sin(2 * np.pi * 0.5 * self.k[5] * t + ph[6])
+        y = s * (0.4 * np.sin(2 * np.pi * 0.35 * self.k[6] * t + ph[7]))
+        z = -1.0 - 0.3 * t + s * 0.2 * np.sin(2 * np.pi * 0.7 * self.k[7] * t + ph[8])
         for k, a in ((1, 1e-3), (2, 2e-4), (3, 5e-5)):
             z = z + f * a * np.sin(2 * np.pi * k * F0 * t + ph[9 + k])
             x = x + f * 0.5 * a * np.sin(2 * np.pi * k * F0 * t + ph[12 + k])

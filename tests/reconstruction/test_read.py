@@ -103,3 +103,16 @@ def test_bad_input_message_and_exit_code(tmp_path, motion, capsys, case):
 def test_read_raw_refuses_the_same(tmp_path, motion):
     with pytest.raises(FlightDataError, match="Euler"):
         read_raw(_motive(tmp_path, motion, rotation="XYZ"), body="DelFly")
+
+
+def test_bad_take_is_answered_before_jax(tmp_path, motion):
+    """A take refused while reading never imports JAX (the answer comes at once)."""
+    import subprocess
+    import sys
+
+    path = _fwid(tmp_path, motion, lost=[(100, 150)])
+    probe = ("import sys\nfrom fwid.cli import main\nrc = main(sys.argv[1:])\n"
+             "print('jax' in sys.modules)\nsys.exit(rc)")
+    res = subprocess.run([sys.executable, "-c", probe, "reconstruct", str(path), "--out",
+                          str(tmp_path / "out"), "--quiet"], capture_output=True, text=True)
+    assert res.returncode == 2 and res.stdout.strip().endswith("False"), res
