@@ -32,7 +32,6 @@ and the baseline, each run once.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import platform
@@ -47,6 +46,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # this checkout's fwid
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # _provenance
 
 LON = ("q", "u", "w", "theta", "X", "Z", "M")
 DEFAULT = {"raw": "motive", "position_noise": 0.4, "rate": 200.0, "dropouts": 0.005, "clock_offset": None}
@@ -202,8 +202,8 @@ def _fmt(x, nd=1):
 
 def markdown(res: dict) -> str:
     lines = ["# Reconstruction: raw takes to flight data, against the simulator's truth", "",
-             f"`{res['command']}` (commit {res['commit']}, {res['date']}; {res['machine']}, "
-             f"load average {res['load_start']:.1f} at start, {res.get('load_end', 0):.1f} at end)", "",
+             f"Machine: {res['machine']}, load average {res['load_start']:.1f} at start, "
+             f"{res.get('load_end', 0):.1f} at end.", "",
              "Errors in %: cycle-averaged (< 5 Hz) RMS error of the excursion; flapping harmonics "
              "h1-h3 RMS error of the band's RMS; medians over the takes. fwid: `fwid reconstruct` as a "
              "process; baseline: finite differences after a 40 Hz Butterworth (`peers/finite_differences.py`, "
@@ -252,11 +252,10 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     takes = args.takes or (1 if args.quick else 2)
     duration = args.duration or (6.0 if args.quick else 10.0)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                            text=True).stdout.strip()
-    res = {"command": "python benchmarks/reconstruction.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-           "commit": commit, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-           "machine": f"{platform.machine()}, {os.cpu_count()} CPUs", "load_start": os.getloadavg()[0],
+    import _provenance
+
+    prov = _provenance.provenance(None if argv is None else [sys.argv[0], *argv])
+    res = {"provenance": prov, "machine": f"{platform.machine()}, {os.cpu_count()} CPUs", "load_start": os.getloadavg()[0],
            "cases": []}
     for i, case in enumerate(grid(args.quick)):
         with tempfile.TemporaryDirectory() as tmp:
@@ -274,9 +273,9 @@ def main(argv=None) -> None:
     res["load_end"] = os.getloadavg()[0]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1) + "\n")
-    out.with_suffix(".md").write_text(markdown(res))
-    print(markdown(res))
+    out.write_text(_provenance.json_text(res, prov, indent=1))
+    out.with_suffix(".md").write_text(_provenance.markdown(markdown(res), prov))
+    print(_provenance.markdown(markdown(res), prov))
     print(f"wrote {out} and {out.with_suffix('.md')}")
 
 
