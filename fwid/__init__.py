@@ -61,10 +61,10 @@ EXPORTS = {
     "estimate": (
         "RelaxedGaussNewton", "FitResult", "fit", "fit_each", "least_squares_start",
         "fit_shooting", "fit_filter_error", "FilterErrorResult", "steady_state_gain",
-        "initialize_distributed",
+        "initialize_distributed", "prior_from", "prior_information",
     ),
     "diagnosis": (
-        "CATALOGUE", "Diagnosis", "diagnose",
+        "CATALOGUE", "Diagnosis", "diagnose", "read_reconstruction",
     ),
     "validate": (
         "StateSpace", "eigenvalues", "state_space", "fit_metrics", "modes",
@@ -72,6 +72,9 @@ EXPORTS = {
     "sensitivity": (
         "cutoff_cost", "eigenvalue_sensitivity", "estimate_sensitivity_to_cutoff",
         "metric_sensitivity", "output_sensitivity", "rank_sensitivities",
+    ),
+    "design": (
+        "Design", "Discrimination", "design_discriminating", "design_input",
     ),
     "identification": (
         "CombinedIdentification", "FlappingIdentification", "FlightFit", "Identification",

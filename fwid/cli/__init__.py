@@ -1,7 +1,8 @@
 """The `fwid` command line (CONTRACTS section 2): thin, it calls the public API.
 
 One module per command: `fwid simulate` (`_simulate.py`), `fwid template` (`_template.py`), `fwid identify` (`_identify.py`,
-all four models), `fwid diagnose` (`_diagnose.py`), `fwid reconstruct` (`_reconstruct.py`); the arguments are in `_parser.py`.
+all four models), `fwid diagnose` (`_diagnose.py`), `fwid reconstruct` (`_reconstruct.py`),
+`fwid design` (`_design.py`); the arguments are in `_parser.py`.
 
 Exit codes: 0 on success, 2 on bad input (one line on stderr: what and where), 1 on an
 internal error.
@@ -12,6 +13,7 @@ from __future__ import annotations
 import os
 import sys
 
+from ._design import design
 from ._diagnose import diagnose
 from ._identify import identify
 from ._parser import parser
@@ -20,7 +22,7 @@ from ._simulate import simulate
 from ._template import template
 
 COMMANDS = {"simulate": simulate, "template": template, "identify": identify,
-            "diagnose": diagnose, "reconstruct": reconstruct}
+            "diagnose": diagnose, "reconstruct": reconstruct, "design": design}
 
 
 def executable_setup() -> None:

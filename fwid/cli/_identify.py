@@ -4,10 +4,12 @@ combined model: Figures 12-17)."""
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from pathlib import Path
 
+from .._errors import InputError
 from ._inputs import IDENTIFY_COLUMNS, VEHICLE_MODELS, check_paths, read_sets
 
 
@@ -17,9 +19,33 @@ def _stem(name: str) -> str:
     return str(Path(name).with_suffix("")).replace("\\", "/").replace("/", "__")
 
 
+def _json_option(path: str | None, flag: str, example: str):
+    """The JSON object in the file of option `flag` (`None` without the option)."""
+    if path is None:
+        return None
+    try:
+        obj = json.loads(Path(path).read_text())
+    except FileNotFoundError:
+        raise InputError(f"{flag} {path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise InputError(f"{flag} {path}: not a readable JSON file ({e}); write {example}") from None
+    if not isinstance(obj, dict):
+        raise InputError(f"{flag} {path}: the file holds a {type(obj).__name__}, not an object; "
+                         f"write {example}")
+    return obj
+
+
 def identify(args) -> int:
     t0 = time.perf_counter()
     check_paths(args.data, args.validate)
+    prior = _json_option(getattr(args, "prior", None), "--prior",
+                         '{"Mq": {"mean": -0.001, "std": 0.0002}}')
+    bounds = _json_option(getattr(args, "bounds", None), "--bounds",
+                          '{"Mq": {"low": -0.01, "high": 0}}')
+    if (prior is not None or bounds is not None) and args.model not in ("lon", "lat"):
+        raise InputError(f"--prior and --bounds apply to --model lon or lat, not {args.model}; "
+                         "drop them")
+    args.prior_values, args.bounds_values = prior, bounds
     vehicle = args.model if args.model in VEHICLE_MODELS else None
     train, held_out = read_sets(args.data, args.validate,
                                 require=IDENTIFY_COLUMNS[args.model], vehicle_for=vehicle)
@@ -67,13 +93,15 @@ def _cycle_averaged(args, flights, validate):
                              plot_fits_overview, spread_table)
 
     ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
-                          cutoff=args.cutoff, progress=not args.quiet)
+                          cutoff=args.cutoff, progress=not args.quiet,
+                          prior=args.prior_values, bounds=args.bounds_values)
     report = fwid.identification_report(ident)
     print(identification_summary(report))
     comparison = None
     if args.joint and validate and len(flights) > 1:  # does sharing pay off?
         comparison = fwid.compare_joint(flights, args.model, validate=validate, joint=ident,
-                                        cutoff=args.cutoff, progress=not args.quiet)
+                                        cutoff=args.cutoff, progress=not args.quiet,
+                                        prior=args.prior_values, bounds=args.bounds_values)
         report["joint_vs_individual"] = joint_report(comparison)
         print("\n" + joint_summary(comparison))
         spread = report["joint_vs_individual"]["modes"]["individual_spread"]

@@ -105,6 +105,13 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: one overview of all flights' fits (the worst and best few "
                    "when many) and the poles (summary), plus one figure per flight (all), or "
                    "none; flap/combined: their figures (summary, all) or none")
+    i.add_argument("--prior", default=None, metavar="PRIOR.json",
+                   help="lon/lat: a Gaussian prior on parameters, {\"Mq\": {\"mean\": .., "
+                   "\"std\": ..}, ..}, or an earlier report.json (its parameters and std): "
+                   "the fit is the maximum a posteriori estimate")
+    i.add_argument("--bounds", default=None, metavar="BOUNDS.json",
+                   help="lon/lat: parameter bounds, {\"Mq\": {\"low\": .., \"high\": ..}, ..} "
+                   "(null or a missing key: open), kept by a bounded Gauss-Newton step")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
 
     rc = sub.add_parser("reconstruct", help="raw tracking takes and autopilot logs to flights: "
@@ -149,4 +156,37 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--out", default=None,
                    help="folder for diagnosis.json and the figure (without it nothing is written)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")
+
+    g = sub.add_parser("design", help="design the control input of the next flight through "
+                                      "the identified model (D-optimal)", formatter_class=fmt)
+    g.add_argument("--model", choices=("lon", "lat"), default=None,
+                   help="the model of the report: elevator (lon) or rudder (lat) input")
+    g.add_argument("--from", dest="source", default=None, metavar="REPORT.json",
+                   help="report.json of `fwid identify --model lon|lat`")
+    g.add_argument("--duration", type=float, default=5.0, help="input length [s]")
+    g.add_argument("--amplitude", type=float, required=True,
+                   help="peak deflection [rad], perturbation from trim")
+    g.add_argument("--quiet", type=float, default=1.0,
+                   help="zero input for the first QUIET seconds (the trim estimate)")
+    g.add_argument("--out", required=True, help="folder for input.csv, design.json, design.png")
+    g.add_argument("--parametrisation", choices=("steps", "multisine"), default="steps",
+                   help="free piecewise-constant sequence or multisine (free amplitudes and "
+                        "phases)")
+    g.add_argument("--switch-rate", type=float, default=10.0,
+                   help="steps: switching rate [Hz]")
+    g.add_argument("--rate", type=float, default=100.0, help="input sample rate [Hz]")
+    g.add_argument("--attitude-limit", type=float, default=None,
+                   help="bound on the predicted attitude excursion [rad] (80%% of it used); "
+                        "default: the excursion of a 3211 of the same amplitude and length")
+    g.add_argument("--restarts", type=int, default=4, help="random restarts")
+    g.add_argument("--seed", type=int, default=0, help="random seed of the restarts")
+    g.add_argument("--no-progress", dest="quiet_progress", action="store_true",
+                   help="no progress lines")
+    g.add_argument("--discriminate", default=None, metavar="DIAGNOSIS_DIR",
+                   help="instead: the input telling apart the two closest effects of the "
+                        "diagnosis in DIAGNOSIS_DIR (diagnosis.json), both models re-fitted on "
+                        "its training flights")
+    g.add_argument("--train", nargs="+", default=None, metavar="DATA",
+                   help="with --discriminate: the diagnosis's training flights (default: the "
+                        "paths its diagnosis.json records)")
     return p

@@ -1,5 +1,11 @@
 from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
 from ._problem import FitResult as FitResult
+from ._prior import (
+    PriorBounds as PriorBounds,
+    bounds_from as bounds_from,
+    prior_from as prior_from,
+    prior_information as prior_information,
+)
 from ._fit import METHODS as METHODS, fit as fit
 from ._each import fit_each as fit_each
 from ._distributed import initialize_distributed as initialize_distributed

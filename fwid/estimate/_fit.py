@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from .._errors import InputError
 from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment, with_measured_x0
 from ._filter_error import fit_filter_error
@@ -30,6 +31,8 @@ def fit(
     local_per_flight: bool | None = None,
     progress: bool = False,
     method: str = "output-error",
+    prior=None,
+    bounds=None,
     **options,
 ) -> FitResult:
     """Estimate the free parameters of `model` by output-error maximum likelihood.
@@ -64,6 +67,20 @@ def fit(
     - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
       (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
       `"filter-error"` for data with process noise (`fwid.estimate._filter_error`).
+    - `prior`: a Gaussian prior on parameters, `{name: (mean, std)}` (or
+      `{name: {"mean": .., "std": ..}}`, a [`fwid.FitResult`][], an identification, a
+      `report.json` dict or file: see [`fwid.prior_from`][], which also scales it). Each
+      adds the residual `(theta - mean) / std` to the cost (the maximum a posteriori
+      estimate; Jategaonkar's "a priori information"), to the Gauss-Newton step and to the
+      information matrix, `M = M_data + diag(1/std^2)`, behind `std` and `std_cr`. A name
+      of a per-flight parameter (`bq`) sets every flight's copy (`bq@0`, ...).
+    - `bounds`: `{name: (low, high)}` (`None` an open side; or `{name: {"low", "high"}}`):
+      the estimate stays within them, by the bounded-variable Gauss-Newton step
+      (Jategaonkar 2015, Sec. 4.13.3: the start clipped into the bounds; a parameter at a
+      bound whose step points out is held there for that step, the step recomputed for
+      the others and projected into the bounds). `FitResult.active` says which bounds are
+      active at the estimate; such a parameter's std is NaN, the others' conditional on it
+      (see [`fwid.FitResult`][]). Output error only.
     - `options`: the chosen method's own options.
 
     **Returns:** a [`fwid.FitResult`][].
@@ -71,7 +88,9 @@ def fit(
     **Raises:** [`fwid.InputError`][] when an experiment's time axis is not uniform or its
     `u`, `z`, `x0` do not match the model's inputs, outputs and states (or `x0` is missing
     where the outputs are not the states and do not include them all; where they include
-    them, a missing `x0` is their first measured sample), [`fwid.ExcitationError`][] when the data cannot
+    them, a missing `x0` is their first measured sample, or a prior or bounds name a
+    parameter that is not free, give a std <= 0 or low >= high, or come with a method other
+    than output error), [`fwid.ExcitationError`][] when the data cannot
     identify a parameter, [`fwid.FitDivergedError`][] when the cost cannot be made finite.
     """
     check_noise(noise)
@@ -85,7 +104,11 @@ def fit(
             raise TypeError(f"fwid.fit: unexpected option(s) {', '.join(sorted(options))} for "
                             "method='output-error'")
         return fit_output_error(model, exps, max_passes=max_passes,
-                                local_per_flight=local_per_flight, **common)
+                                local_per_flight=local_per_flight, prior=prior,
+                                bounds=bounds, **common)
+    if method in METHODS and (prior is not None or bounds is not None):
+        raise InputError(f"fwid.fit: prior= and bounds= work with method='output-error' only, "
+                         f"not method={method!r}; drop them or fit by output error")
     if method == "multiple-shooting":
         return fit_shooting(model, exps, **common, **options)
     if method == "filter-error":

@@ -9,6 +9,8 @@ import lineax as lx
 import optimistix as optx
 from jaxtyping import Array, PyTree, Scalar
 
+from ._prior import PriorBounds
+
 
 # --------------------------------------------------------------------------------------------
 # Gauss-Newton on the output-error likelihood with R relaxed at every step
@@ -103,11 +105,14 @@ class _RelaxedState(eqx.Module):
 class _RelaxedStepHalving(optx.AbstractSearch):
     """Step halving on the likelihood itself (Eq. 10 with R from Eq. 11 at the trial point):
     a step is accepted when it lowers the cost by at least `slope` times the first-order
-    prediction (Armijo), otherwise halved. A step whose predicted decrease is below the
+    prediction (Armijo), otherwise halved. The cost includes the prior's
+    (`fwid.estimate._prior`); with bounds the step is the projected one, so the halving
+    searches along the projected path (Bertsekas' projected Newton). A step whose predicted decrease is below the
     cost's round-off (`roundoff (1 + |cost|)`) is accepted unless the cost rises by more than
     that. Keeps the cost history of the accepted points."""
 
     noise: NoiseModel
+    prior: PriorBounds | None
     history_length: int = eqx.field(static=True)
     slope: float = 1e-4
     roundoff: float = 1e3 * float(jnp.finfo(jnp.float64).eps)
@@ -125,6 +130,10 @@ class _RelaxedStepHalving(optx.AbstractSearch):
         Rinv = jnp.linalg.inv(self.noise.R(v))
         dv = f_info.jac.mv(y_eval - y)  # the residuals' first-order change
         predicted = jnp.einsum("...i,ij,...j->", v, Rinv, dv)  # gradient . step
+        if self.prior is not None:  # its cost, and its gradient W^2 (y - mean) . step
+            c_eval = c_eval + self.prior.cost(y_eval)
+            w2 = self.prior.weight**2
+            predicted = predicted + jnp.sum(w2 * (y - self.prior.mean) * (y_eval - y))
         armijo = (c_eval - state.cost <= self.slope * predicted) & (predicted <= 0)
         # Near the optimum the decrease a step promises falls below the cost's round-off,
         # where comparing costs decides nothing: then take the step unless the cost rises
@@ -146,23 +155,63 @@ class _RelaxedStepHalving(optx.AbstractSearch):
 
 
 class _RelaxedNewtonState(eqx.Module):
-    newton: Array  # the step is -step_size * newton
+    y: Array  # the point the step starts from
+    newton: Array  # the step is clip(y - step_size * newton) - y
     sensitivity: Array  # sqrt(diag H): the whitened-residual norm per unit of each parameter
     decrement: Array  # g^T H^-1 g: twice the cost decrease the full step predicts
+    held: Array  # -1 / +1: held at the lower / upper bound for this step, 0: free
     result: optx.RESULTS
 
 
+def _scaled_newton(H, g, free):
+    """`H^-1 g` over the `free` parameters (0 for the others), solved (Cholesky) after
+    scaling every parameter to unit sensitivity."""
+    h = jnp.sqrt(jnp.diag(H))
+    d = jnp.where(free & (h > 0), 1.0 / jnp.where(h > 0, h, 1.0), 0.0)
+    Hs = H * d[:, None] * d[None, :] + jnp.diag(jnp.where(d > 0, 0.0, 1.0))
+    # Cholesky by hand rather than `lineax.linear_solve`: lineax compares the operand's
+    # sharding with the operator's, which fails inside `shard_map` (one device's flights).
+    factor = jax.scipy.linalg.cho_factor(Hs, lower=True)
+    return d * jax.scipy.linalg.cho_solve(factor, d * g)
+
+
+def bounded_newton(H, g, y, lower, upper):
+    """The bounded-variable Gauss-Newton step (Jategaonkar 2015, Sec. 4.13.3): the Newton
+    step `H^-1 g` (the step is its negative) with every parameter that sits at a bound and
+    whose step points out of the bounds held there (step 0), the step recomputed for the
+    others, until no held parameter's step would leave (at most `p` rounds: the held set
+    only grows). Returns `(newton, held)`, `held` -1 / +1 at the lower / upper bound, else 0.
+    Without bounds (or none reached) it is the plain Gauss-Newton step, bit for bit."""
+    at_low, at_high = y <= lower, y >= upper
+
+    def grow(carry):
+        held, _ = carry
+        n = _scaled_newton(H, g, ~held)
+        new = held | (at_low & (n > 0)) | (at_high & (n < 0))
+        return new, jnp.any(new != held)
+
+    held, _ = jax.lax.while_loop(lambda c: c[1], grow,
+                                 (jnp.zeros(y.shape, bool), jnp.any(at_low | at_high)))
+    newton = _scaled_newton(H, g, ~held)
+    side = jnp.where(held & at_low, -1, jnp.where(held & at_high, 1, 0))
+    return newton, side
+
+
 class _RelaxedNewtonDescent(optx.AbstractDescent):
-    """Jategaonkar's Gauss-Newton step `(sum J^T R^-1 J) dtheta = -sum J^T R^-1 v` with R from
-    the residuals at the current point, solved (Cholesky) on the 16x16-sized normal
-    equations after scaling every parameter to unit sensitivity."""
+    """Jategaonkar's Gauss-Newton step `(sum J^T R^-1 J + W^2) dtheta = -(sum J^T R^-1 v +
+    W^2 (theta - mean))` with R from the residuals at the current point (`W`, `mean`: the
+    prior's, zero without one), solved (Cholesky) on the 16x16-sized normal equations after
+    scaling every parameter to unit sensitivity; with bounds, the bounded-variable step
+    ([`bounded_newton`][]) projected into the bounds."""
 
     noise: NoiseModel
+    prior: PriorBounds | None = None
 
     def init(self, y, f_info_struct):
         del f_info_struct
-        return _RelaxedNewtonState(newton=jnp.zeros_like(y), sensitivity=jnp.ones_like(y),
+        return _RelaxedNewtonState(y=y, newton=jnp.zeros_like(y), sensitivity=jnp.ones_like(y),
                                    decrement=jnp.array(jnp.inf, dtype=y.dtype),
+                                   held=jnp.zeros(y.shape, int),
                                    result=optx.RESULTS.successful)
 
     def query(self, y, f_info, state):
@@ -170,22 +219,23 @@ class _RelaxedNewtonDescent(optx.AbstractDescent):
         v = f_info.residual
         J = f_info.jac.as_matrix().reshape(*v.shape, y.shape[0])
         H, g = self.noise.gradient_terms(v, J)
-        h = jnp.sqrt(jnp.diag(H))
-        d = jnp.where(h > 0, 1.0 / jnp.where(h > 0, h, 1.0), 0.0)
-        Hs = H * d[:, None] * d[None, :] + jnp.diag(jnp.where(h > 0, 0.0, 1.0))
-        # Cholesky by hand rather than `lineax.linear_solve`: lineax compares the operand's
-        # sharding with the operator's, which fails inside `shard_map` (one device's flights).
-        factor = jax.scipy.linalg.cho_factor(Hs, lower=True)
-        newton = d * jax.scipy.linalg.cho_solve(factor, d * g)
+        if self.prior is None:
+            newton, held = _scaled_newton(H, g, jnp.ones(y.shape, bool)), jnp.zeros(y.shape, int)
+        else:
+            H, g = self.prior.add_terms(H, g, y)
+            newton, held = bounded_newton(H, g, y, self.prior.lower, self.prior.upper)
         ok = jnp.all(jnp.isfinite(newton))
         newton = jnp.where(ok, newton, 0.0)
         result = optx.RESULTS.where(ok, optx.RESULTS.successful,
                                     optx.RESULTS.promote(lx.RESULTS.singular))
-        return _RelaxedNewtonState(newton=newton, sensitivity=h, decrement=g @ newton,
-                                   result=result)
+        return _RelaxedNewtonState(y=y, newton=newton, sensitivity=jnp.sqrt(jnp.diag(H)),
+                                   decrement=g @ newton, held=held, result=result)
 
     def step(self, step_size, state):
-        return -step_size * state.newton, state.result
+        if self.prior is None:
+            return -step_size * state.newton, state.result
+        y = state.y
+        return self.prior.clip(y - step_size * state.newton) - y, state.result
 
 
 class RelaxedGaussNewton(optx.AbstractGaussNewton):
@@ -202,6 +252,10 @@ class RelaxedGaussNewton(optx.AbstractGaussNewton):
     `stall_steps` halvings in a row (no step lowers the cost: converged to round-off).
     The relaxation converges linearly (here by a factor of about 40 per step), so a tight
     `atol` costs a step or two.
+
+    With a `prior` (`fwid.estimate.PriorBounds`: a prior and bounds) its residuals
+    `(theta - mean) / std` join the cost, the step and the convergence test, and the step is
+    the bounded-variable one (`bounded_newton`), projected into the bounds.
     """
 
     rtol: float
@@ -213,13 +267,14 @@ class RelaxedGaussNewton(optx.AbstractGaussNewton):
     cost_rtol: float
     stall_steps: int = eqx.field(static=True)
 
-    def __init__(self, noise: NoiseModel, *, rtol: float = 1e-10, atol: float = 1e-9,
-                 cost_rtol: float = 1e-10, history_length: int = 60, stall_steps: int = 10):
+    def __init__(self, noise: NoiseModel, prior: PriorBounds | None = None, *,
+                 rtol: float = 1e-10, atol: float = 1e-9, cost_rtol: float = 1e-10,
+                 history_length: int = 60, stall_steps: int = 10):
         self.rtol = rtol
         self.atol = atol
         self.norm = optx.max_norm
-        self.descent = _RelaxedNewtonDescent(noise)
-        self.search = _RelaxedStepHalving(noise, history_length)
+        self.descent = _RelaxedNewtonDescent(noise, prior)
+        self.search = _RelaxedStepHalving(noise, prior, history_length)
         self.verbose = lambda **kw: None
         self.cost_rtol = cost_rtol
         self.stall_steps = stall_steps
@@ -241,8 +296,9 @@ class RelaxedGaussNewton(optx.AbstractGaussNewton):
 class RelaxedSolution(eqx.Module):
     """What [`solve_relaxed`][] found: the estimate `theta`, the residuals `v` `(..., ny)` and
     their Jacobian `J` `(..., ny, p)` at it (the last accepted point), R of Eq. (11) at `v`,
-    the cost (Eq. 10), the cost `history` of the accepted steps, `accepted` steps, `steps`
-    taken and whether the solver `converged`."""
+    the cost (Eq. 10, plus the prior's part), the cost `history` of the accepted steps,
+    `accepted` steps, `steps` taken, whether the solver `converged`, and which parameters
+    the last step `held` at a bound (-1 lower, +1 upper, 0 free: the active bounds)."""
 
     theta: Array
     v: Array
@@ -253,6 +309,7 @@ class RelaxedSolution(eqx.Module):
     accepted: Array
     steps: Array
     converged: Array
+    held: Array
 
     def whitened(self) -> tuple[Array, Array]:
         """`(w, S)`: the residuals and their Jacobian whitened by R (`w = L^-1 v`,
@@ -271,15 +328,19 @@ def solve_relaxed(
     cost_rtol: float,
     max_steps: int,
     atol: float = 1e-9,
+    prior: PriorBounds | None = None,
 ) -> RelaxedSolution:
     """Minimise the output-error likelihood (Eq. 10, R relaxed by Eq. 11 at every step) of
     the residuals `v(theta)` by [`RelaxedGaussNewton`][]: one `optimistix.least_squares` solve
     from `theta0`, the residuals and their Jacobian from `residuals_and_jacobian(theta) ->
     (v, dv/dtheta)` once per point ([`jacobian_once`][]). Pure and jit/vmap-able; shared by
     output error (`v` the output errors) and filter error (`v` the innovations, Jategaonkar
-    Eq. 5.36 at a fixed gain)."""
+    Eq. 5.36 at a fixed gain). With a `prior` ([`PriorBounds`][]: a prior and bounds) the
+    start is clipped into the bounds and the cost is the posterior's."""
     residuals = jacobian_once(residuals_and_jacobian)
-    solver = RelaxedGaussNewton(noise, rtol=rtol, atol=atol, cost_rtol=cost_rtol,
+    if prior is not None:
+        theta0 = prior.clip(theta0)
+    solver = RelaxedGaussNewton(noise, prior, rtol=rtol, atol=atol, cost_rtol=cost_rtol,
                                 history_length=max_steps)
     sol = optx.least_squares(lambda th, _: residuals(th), solver, theta0, max_steps=max_steps,
                              throw=False)
@@ -290,4 +351,5 @@ def solve_relaxed(
     return RelaxedSolution(theta=theta, v=v, J=J, R=noise.R(v), cost=state.search_state.cost,
                            history=state.search_state.history,
                            accepted=state.search_state.accepted, steps=sol.stats["num_steps"],
-                           converged=sol.result == optx.RESULTS.successful)
+                           converged=sol.result == optx.RESULTS.successful,
+                           held=state.descent_state.held)

@@ -20,6 +20,7 @@ from . import _exported as exported
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
+from ._prior import PriorBounds, has_any, prior_bounds
 from ._problem import (
     FitResult,
     check_information,
@@ -33,7 +34,7 @@ from ._uncertainty import (
     coloured_residual_middle,
     correlation,
     correlation_length,
-    covariance,
+    covariance_held,
     lag1_autocorrelation,
     fisher_information,
 )
@@ -56,8 +57,8 @@ def raw_residuals(model, params, batch):
     return (batch.z - y) * batch.mask[..., None]
 
 
-def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_passes,
-               max_steps, rtol, cost_rtol, n_local_batch=0):
+def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, prior: PriorBounds | None = None,
+               *, diagonal, max_passes, max_steps, rtol, cost_rtol, n_local_batch=0):
     """The whole estimator on one (padded) batch of experiments that share the parameters.
 
     Pure and jit/vmap-able: one `optimistix.least_squares` solve with [`RelaxedGaussNewton`][]
@@ -67,7 +68,10 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
     `jax.jacfwd` through the RK4 simulation), handed to optimistix as the derivative of the
     residual function ([`jacobian_once`][]). The uncertainty is computed from the Jacobian
     at the estimate that the last step already holds. `max_passes` is unused (kept for the
-    signature: every step is a relaxation pass).
+    signature: every step is a relaxation pass). `prior`: a prior and bounds
+    ([`PriorBounds`][]): the prior's residuals join the cost, the step and the information
+    matrix (`M = M_data + diag(1/std^2)`), the bounds make the step the bounded-variable one
+    and the parameters held at an active bound leave the covariance (`covariance_held`).
     """
     del max_passes
     noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
@@ -88,7 +92,7 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
         return (batch.z - ys) * m, -dys * m[..., None]
 
     sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
-                        max_steps=max_steps)
+                        max_steps=max_steps, prior=prior)
     theta, v, R, cost = sol.theta, sol.v, sol.R, sol.cost  # v: (B, n, ny), the last accepted
 
     # Uncertainty at the estimate: Cramer-Rao, and corrected for coloured residuals.
@@ -102,8 +106,11 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
         return coloured_residual_middle(S, v, mask, L)
 
     middle = jax.vmap(middle_of)(Sw, w, batch.mask).sum(0)
-    cov_cr = covariance(M)
-    cov_c = covariance(M, middle)
+    if prior is not None:  # the prior's residuals are white: the same in both
+        M = M + prior.information()
+        middle = middle + prior.information()
+    cov_cr = covariance_held(M, held=sol.held)
+    cov_c = covariance_held(M, middle, sol.held)
     finite = jnp.all(jnp.isfinite(w)) & jnp.all(jnp.isfinite(Sw))
     merged = merge_batch(model, theta, n_local_batch)
     first = flight_params(merged, 0)  # flight 0's locals
@@ -114,16 +121,17 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, *, diagonal, max_
                 converged=sol.converged, M=M, cov_cr=cov_cr,
                 cov=cov_c, lag1=jax.vmap(lag1_autocorrelation)(v, batch.mask),
                 residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
-                colour=jax.vmap(colour_at_bandwidth)(v, batch.z, batch.mask))
+                colour=jax.vmap(colour_at_bandwidth)(v, batch.z, batch.mask),
+                held=sol.held)
 
 
 _fit_batch_jit = eqx.filter_jit(_fit_batch)
 
 
 @eqx.filter_jit
-def _fit_one_jit(model, theta0, exp: Experiment, **kw):
+def _fit_one_jit(model, theta0, exp: Experiment, prior=None, **kw):
     """[`_fit_batch`][] on a single experiment (the batch axis added inside the program)."""
-    return _fit_batch(model, theta0, jax.tree.map(lambda a: a[None], exp), **kw)
+    return _fit_batch(model, theta0, jax.tree.map(lambda a: a[None], exp), prior, **kw)
 
 
 def fit_output_error(
@@ -139,9 +147,13 @@ def fit_output_error(
     cost_rtol: float = 1e-10,
     local_per_flight: bool | None = None,
     progress: bool = False,
+    prior=None,
+    bounds=None,
 ) -> FitResult:
     """[`fwid.fit`][] with `method="output-error"`, Eqs. (10)-(11): Gauss-Newton with R
-    relaxed at every step, on experiments whose `x0` is set (`with_measured_x0`).
+    relaxed at every step, on experiments whose `x0` is set (`with_measured_x0`); with a
+    `prior` and `bounds` (`fwid.estimate._prior`), the maximum a posteriori estimate within
+    the bounds.
 
     **Arguments:** as [`fwid.fit`][].
 
@@ -152,7 +164,13 @@ def fit_output_error(
     t0 = time.perf_counter()
     per_flight = len(exps) > 1 and model.local and local_per_flight is not False
     n_local = len(exps) if per_flight else 0
+    pb = None  # without a prior or bounds: the plain fit's program
+    if prior is not None or bounds is not None:
+        pb = prior_bounds(model, free_layout(model, n_local)[2], prior, bounds)
+        pb = pb if has_any(pb) else None
     start_model, theta0 = prepare(model, exps, names, start, n_local)
+    if pb is not None:
+        theta0 = pb.clip(theta0)
     if progress:
         print(f"fwid: fitting {model.name} ({len(model.free)} parameters) to "
               f"{', '.join(names)} ...", flush=True)
@@ -162,11 +180,11 @@ def fit_output_error(
                 else (_fit_batch_jit, stack_experiments(exps, n)))
 
     def run(diagonal: bool) -> FitResult:
-        out = exported.call(fn, (start_model, theta0, data), diagonal=diagonal,
+        out = exported.call(fn, (start_model, theta0, data, pb), diagonal=diagonal,
                             max_passes=max_passes, max_steps=max_steps, rtol=rtol,
                             cost_rtol=cost_rtol, n_local_batch=n_local)
         return _result(model, start_model, theta0, out, names, n_local, max_steps,
-                       "diagonal" if diagonal else "full")
+                       "diagonal" if diagonal else "full", pb)
 
     if noise != "auto":
         result = run(noise == "diagonal")
@@ -197,7 +215,7 @@ def with_instability(result: FitResult, exps, names) -> FitResult:
 
 
 def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
-            noise="full") -> FitResult:
+            noise="full", prior: PriorBounds | None = None) -> FitResult:
     """Check the estimator's raw output and wrap it in a [`fwid.FitResult`][]."""
     glob, loc, free_names = free_layout(model, n_local)
     if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
@@ -226,6 +244,10 @@ def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
         lag1=jnp.max(jnp.reshape(out["lag1"], (-1, len(model.outputs))), axis=0),
         residual_corr=out["residual_corr"],
         colour=jnp.max(jnp.reshape(out["colour"], (-1, len(model.outputs))), axis=0),
+        prior=prior,
+        active=None if prior is None or not np.any(np.isfinite(np.asarray(prior.lower))
+                                                   | np.isfinite(np.asarray(prior.upper)))
+        else out["held"],
     )
     found = fit_warnings(result, names, max_steps, information=out["M"])
     return dataclasses.replace(result, warnings=tuple(found))

@@ -20,6 +20,7 @@ from .._errors import ExcitationError
 from ..models._greybox import GreyBoxModel
 from ..simulation._checks import check_experiment
 from ..simulation._experiment import Experiment
+from ._prior import PriorBounds
 from ._start import least_squares_start
 
 
@@ -60,6 +61,16 @@ class FitResult(eqx.Module):
       not `lag1`, is what the model-error warning and `noise="auto"` read.
     - `residual_corr`: the correlation matrix of the residuals between the outputs (whatever
       R the fit used).
+    - `prior`: the prior and the bounds the fit used (`fwid.estimate.PriorBounds` over `names`: means,
+      `1/std`, lower and upper bounds), `None` for a fit without either. With a prior,
+      `cost` and `cost_history` include its part `1/2 sum ((theta - mean) / std)^2` (the
+      negative log-posterior) and the information behind `std`, `std_cr` and `cov` its
+      `diag(1/std^2)`.
+    - `active`: per parameter, -1 / +1 where the estimate sits at an active lower / upper
+      bound (the data pull it beyond), else 0 (`None` without bounds). Such a parameter's
+      `std`, `std_cr` and its row and column of `cov` and `corr` are NaN (its spread is
+      one-sided, not Gaussian), and those of the others are conditional on it held at the
+      bound; see `active_bounds`.
     """
 
     model: GreyBoxModel
@@ -81,10 +92,40 @@ class FitResult(eqx.Module):
     lag1: Float[Array, " ny"] | None = None
     residual_corr: Float[Array, "ny ny"] | None = None
     colour: Float[Array, " ny"] | None = None
+    prior: PriorBounds | None = None
+    active: Int[Array, " p"] | None = None
 
     @property
     def params(self) -> dict:
         return self.model.params
+
+    @property
+    def active_bounds(self) -> dict[str, str]:
+        """`{name: "low" | "high"}`: the parameters at an active bound."""
+        if self.active is None:
+            return {}
+        side = {-1: "low", 1: "high"}
+        return {k: side[int(a)] for k, a in zip(self.names, np.asarray(self.active)) if a}
+
+    def prior_table(self) -> dict[str, dict[str, float]]:
+        """`{name: {"mean", "std"}}`: the prior the fit used (empty without one)."""
+        if self.prior is None:
+            return {}
+        mean, w = np.asarray(self.prior.mean), np.asarray(self.prior.weight)
+        return {k: {"mean": float(mean[i]), "std": float(1.0 / w[i])}
+                for i, k in enumerate(self.names) if w[i] > 0}
+
+    def bounds_table(self) -> dict[str, dict]:
+        """`{name: {"low", "high", "active", "at"}}`: the bounds the fit used (`None` an open
+        side), whether one is active at the estimate and which (`"low"`, `"high"`, `None`)."""
+        if self.prior is None:
+            return {}
+        lo, hi = np.asarray(self.prior.lower), np.asarray(self.prior.upper)
+        active = self.active_bounds
+        return {k: {"low": float(lo[i]) if np.isfinite(lo[i]) else None,
+                    "high": float(hi[i]) if np.isfinite(hi[i]) else None,
+                    "active": k in active, "at": active.get(k)}
+                for i, k in enumerate(self.names) if np.isfinite(lo[i]) or np.isfinite(hi[i])}
 
     def flight_model(self, i: int) -> GreyBoxModel:
         """The model with flight `i`'s own local parameters (bias terms) of a joint fit."""

@@ -77,6 +77,25 @@ def covariance(M, middle=None):
     return Minv @ middle @ Minv
 
 
+def covariance_held(M, middle=None, held=None):
+    """[`covariance`][] of the parameters free at a bound-constrained estimate: those that
+    sit at an active bound (`held != 0`, see `fwid.estimate._gauss_newton.bounded_newton`)
+    are taken as known there (the information of the others is `M` without their rows and
+    columns: the conditional covariance, the uncertainty of the others given the held ones
+    at their bounds), and their own rows and columns are NaN. An estimate at an active bound
+    is where the likelihood's maximum inside the bounds is, not a stationary point: the
+    curvature there does not give its spread (which is one-sided), so none is reported.
+    With nothing held this is [`covariance`][], bit for bit."""
+    if held is None:
+        return covariance(M, middle)
+    free = held == 0
+    both = free[:, None] & free[None, :]
+    eye = jnp.eye(M.shape[0], dtype=M.dtype)
+    cov = covariance(jnp.where(both, M, eye),
+                     None if middle is None else jnp.where(both, middle, 0.0))
+    return jnp.where(both, cov, jnp.nan)
+
+
 def correlation(cov: Float[Array, "p p"]) -> Float[Array, "p p"]:
     d = jnp.sqrt(jnp.diag(cov))
     return cov / jnp.outer(d, d)

@@ -92,11 +92,15 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
     the estimate, to name the parameters that cannot be separated when it is singular."""
     who = f"{', '.join(flights)}: the {result.model.name} fit"
     out = []
+    # parameters at an active bound have no std (NaN by design, `FitResult.active`)
+    active = getattr(result, "active", None)
+    free = (np.ones(len(result.names), bool) if active is None
+            else np.asarray(active) == 0)
     if not (np.all(np.isfinite(np.asarray(result.theta)))
             and np.isfinite(float(result.cost))):
         out.append(f"{who} diverged: the simulation or the estimate is not finite; check the "
                    "units, the trim and the start values")
-    elif not np.all(np.isfinite(np.asarray(result.std))):
+    elif not np.all(np.isfinite(np.asarray(result.std)[free])):
         out.append(f"{who} has non-finite standard deviations (the simulation or the "
                    "information matrix is not finite at the estimate): the uncertainty "
                    "cannot be trusted")
@@ -131,7 +135,8 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
                    "Kalman filter in the likelihood, whose innovations should be white); the "
                    "standard deviations `std` allow for the colour, `std_cr` does not")
     pairs = correlated_pairs(result.corr, result.names)
-    if not pairs and information is not None and not np.all(np.isfinite(np.asarray(result.corr))):
+    corr_free = np.asarray(result.corr)[np.ix_(free, free)]
+    if not pairs and information is not None and not np.all(np.isfinite(corr_free)):
         pairs = collinear_pairs(information, result.names)
     if pairs:
         listed = ", ".join(f"{a} and {b} ({c:+.4f})" for a, b, c in pairs[:5])

@@ -13,6 +13,7 @@ from .._errors import InputError
 from ..data._flight import Flight
 from ..estimate._each import fit_each
 from ..estimate._fit import fit
+from ..estimate._prior import prior_bounds
 from ..estimate._problem import FitResult
 from ..models._delfly import lateral, longitudinal
 from ..models._greybox import GreyBoxModel
@@ -123,6 +124,8 @@ def identify(
     noise_cutoff: float = 40.0,
     start: str | GreyBoxModel = "least-squares",
     progress: bool = False,
+    prior=None,
+    bounds=None,
 ) -> Identification:
     """Identify the cycle-averaged model from flights, as in the paper's Section IV.
 
@@ -144,6 +147,8 @@ def identify(
     - `start`: passed to [`fwid.fit`][]: `"least-squares"`, `"model"` (the model's values)
       or a model whose values to start from.
     - `progress`: print a line per stage.
+    - `prior`, `bounds`: a Gaussian prior on parameters and bounds, passed to
+      [`fwid.fit`][] (with per-flight fits, every flight's fit gets them).
 
     **Returns:** an [`fwid.Identification`][].
     """
@@ -151,17 +156,21 @@ def identify(
     flights = list(flights)
     if not flights:
         raise InputError("no flights to identify from")
+    if prior is not None or bounds is not None:  # bad names or values: say so now
+        prior_bounds(model, list(model.free), prior, bounds)
     _say_missing_forces(model, list(flights) + list(validate))
     exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]
     names = [f.name for f in flights]
     if joint or len(exps) == 1:
-        fits = [fit(model, exps, names=names, start=start, progress=progress)]
+        fits = [fit(model, exps, names=names, start=start, progress=progress, prior=prior,
+                    bounds=bounds)]
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
             estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
     else:
-        fits = fit_each(model, exps, names=names, start=start, progress=progress)
+        fits = fit_each(model, exps, names=names, start=start, progress=progress, prior=prior,
+                        bounds=bounds)
         summary = _mean_model(model, fits)
         estimation = [evaluate(f.model, e, n, refit_local=False)
                       for f, e, n in zip(fits, exps, names)]

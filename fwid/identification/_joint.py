@@ -70,6 +70,8 @@ def compare_joint(
     cutoff: float = 5.0,
     noise_cutoff: float = 40.0,
     progress: bool = False,
+    prior=None,
+    bounds=None,
 ) -> JointComparison:
     """Fit `model` to `flights` jointly and one by one, and score both on `validate`.
 
@@ -92,7 +94,8 @@ def compare_joint(
     if not validate:
         raise InputError("comparing a joint fit with individual fits needs held-out flights "
                          "(validate=...)")
-    kw = dict(validate=validate, cutoff=cutoff, noise_cutoff=noise_cutoff, progress=progress)
+    kw = dict(validate=validate, cutoff=cutoff, noise_cutoff=noise_cutoff, progress=progress,
+              prior=prior, bounds=bounds)
     joint = joint or identify(flights, model, joint=True, **kw)
     individual = individual or identify(flights, model, joint=False, **kw)
     outputs = list(joint.model.outputs)

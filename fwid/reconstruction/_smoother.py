@@ -5,7 +5,7 @@ The noise levels come from the data: the smoother's cut-off `f_c` of the slow pa
 bandwidth `f_h` of the flapping coefficients and (with a gyro) the gyro's noise relative to
 the attitude's are chosen on a grid (`_model.CUTOFFS`, ...) by the innovations'
 log-likelihood, with the overall noise scale concentrated out (it is `mean(nu^2 / S)`);
-the likelihood is evaluated on at most `ML_WINDOW` samples from the middle of the take.
+the likelihood is evaluated on the take's most active `ML_WINDOW` samples (`_active_window`).
 The problems are split over the CPU devices (one per core, `fwid._jax_setup`).
 """
 
@@ -38,6 +38,31 @@ def _fns():
         _JIT["grid"] = jax.jit(lambda *a: concentrated_loglik(stats(*a)))
         _JIT["smooth"] = jax.jit(jax.vmap(smooth, in_axes=(None, 0, 0, 0, 0, 0, 0, 0, None)))
     return _JIT
+
+
+def _active_window(z, u, mask, dt) -> np.ndarray:
+    """Sample indices `(M, W)` of each problem's most active `ML_WINDOW` samples, where the
+    noise levels are chosen: the window with the largest energy of the second difference of
+    the measured path (`z` less the summed inputs `u`), averaged over ~0.1 s (a take that is
+    quiet but for its manoeuvre must be smoothed as its manoeuvre needs)."""
+    M, N = mask.shape
+    W = min(N, ML_WINDOW)
+    path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
+    k = max(1, int(round(0.1 / dt)))
+    out = np.empty((M, W), int)
+    for m in range(M):
+        y = path[m]
+        good = np.isfinite(y[:, 0])
+        y = np.stack([np.interp(np.arange(N), np.flatnonzero(good), c[good]) for c in y.T], 1)
+        kernel = np.ones(k) / k
+        sm = np.stack([np.convolve(c, kernel, mode="same") for c in y.T], 1)
+        a = np.zeros(N)
+        a[1:-1] = np.sum((sm[2:] - 2 * sm[1:-1] + sm[:-2]) ** 2, 1)
+        a[:k], a[-k:] = 0.0, 0.0  # the convolution's edges
+        c = np.concatenate([[0.0], np.cumsum(a)])
+        start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0
+        out[m] = np.arange(start, start + W)
+    return out
 
 
 def _spread(*arrays):
@@ -122,17 +147,16 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
                                            mdl.GYRO_RATIOS if bias else (1.0,)))] * M
         else:  # the motion's levels known (from the attitude alone): the gyro's noise only
             grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
-        lo = max(0, (N - ML_WINDOW) // 2)
-        win = slice(lo, min(N, lo + ML_WINDOW))
+        idx = _active_window(z, U[:, :, 0, :], mask, dt)  # (M, W)
+        take = lambda a: np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)  # noqa: E731
         Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
         Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
         if any(gm != grid[0] for gm in grid):  # gyro ratios only: the same for every problem
             assert all([g for *_, g in gm] == [g for *_, g in grid[0]] for gm in grid)
         m0w = m0.copy()
-        fw = np.argmax(mask[:, win], axis=1)
-        m0w[:, 0, :] = z[:, win][np.arange(M), fw]
-        (Qs, Hw, Zw, MKw, Uw, m0w), _ = _spread(Qs, H[:, win], Z[:, win], MK[:, win],
-                                                  U[:, win], m0w)
+        fw = np.argmax(take(mask), axis=1)
+        m0w[:, 0, :] = take(z)[np.arange(M), fw]
+        (Qs, Hw, Zw, MKw, Uw, m0w), _ = _spread(Qs, take(H), take(Z), take(MK), take(U), m0w)
         ll = np.asarray(fns["grid"](jnp.asarray(F), Qs, Hw, jnp.asarray(Rs), Zw, MKw, Uw, m0w,
                                     jnp.asarray(P0)))[:M]
         best = np.argmax(np.where(np.isfinite(ll), ll, -np.inf), axis=1)

@@ -59,7 +59,7 @@ def converged_flags(report: dict) -> list[bool]:
 
 
 def _fit_block(ident, fit, estimation, eigs):
-    return {
+    block = {
         "parameters": parameters(fit),
         "eigenvalues": eig_list(eigs),
         "modes": modes(eigs),
@@ -68,6 +68,29 @@ def _fit_block(ident, fit, estimation, eigs):
         "correlation": {"names": list(fit.names), "matrix": np.asarray(fit.corr)},
         "fit": fit_info(fit, ident.model.outputs),
     }
+    return {**block, **prior_and_bounds([fit])}
+
+
+def prior_and_bounds(fits, flights=None) -> dict:
+    """The `"prior"` (`{name: {"mean", "std"}}`) and `"bounds"` (`{name: {"low", "high",
+    "active", "at"}}`, `None` an open side) keys of a report, for fits that used them
+    ([`fwid.fit`][]`(prior=, bounds=)`; empty otherwise). Over several fits (one per flight,
+    all with the same prior and bounds) a bound is `active` where it is in any of them, and
+    `active_in` names those fits' `flights` (`at` is then that of the first)."""
+    out = {}
+    prior = fits[0].prior_table() if hasattr(fits[0], "prior_table") else {}
+    bounds = fits[0].bounds_table() if hasattr(fits[0], "bounds_table") else {}
+    if prior:
+        out["prior"] = prior
+    if bounds and len(fits) > 1:
+        for k, b in bounds.items():
+            sides = [f.active_bounds.get(k) for f in fits]
+            b["active"] = any(sides)
+            b["at"] = next((s for s in sides if s), None)
+            b["active_in"] = [(flights[i] if flights else i) for i, s in enumerate(sides) if s]
+    if bounds:
+        out["bounds"] = bounds
+    return out
 
 
 def pooled_metrics(flight_fits) -> dict:
@@ -151,6 +174,7 @@ def identification_report(ident) -> dict:
         report["parameters"] = block["parameters"]
         report["correlation"] = block["correlation"]
         report["fit"] = block["fit"]
+        report.update(prior_and_bounds(ident.fits))
         if ident.joint and len(ident.flights) > 1:
             report["local_parameters"] = {
                 k: {"value": v["value"], "std": v["std"]}
@@ -173,4 +197,5 @@ def identification_report(ident) -> dict:
         report["summary"] = ("top-level parameters are the mean over the per-flight fits; "
                              "their std is the spread (sample std) across flights")
         report["modes_spread"] = modes_spread([p["modes"] for p in per])
+        report.update(prior_and_bounds(ident.fits, ident.flights))
     return report

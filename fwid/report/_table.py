@@ -83,12 +83,30 @@ def warnings_lines(report: dict) -> list[str]:
     return [""] + [f"WARNING: {w}" for w in report["warnings"]] if report.get("warnings") else []
 
 
+def prior_bounds_lines(report: dict) -> list[str]:
+    """One line each for the prior and the bounds a report's fits used (none without)."""
+    out = []
+    if report.get("prior"):
+        out.append("prior (mean +- std): " + ", ".join(
+            f"{k} {p['mean']:.4g} +- {p['std']:.3g}" for k, p in report["prior"].items()))
+    if report.get("bounds"):
+        def side(x):
+            return "open" if x is None else f"{x:.4g}"
+
+        out.append("bounds: " + ", ".join(
+            f"{k} in [{side(b['low'])}, {side(b['high'])}]"
+            + (f" (active at {b['at']})" if b["active"] else "")
+            for k, b in report["bounds"].items()))
+    return out
+
+
 def identification_summary(report: dict) -> str:
     """The terminal summary of `fwid identify`: parameters, modes, metrics."""
     out = [f"fwid identify: model {report['model']}, flights: {', '.join(report['flights'])}"]
     if "summary" in report:
         out.append(f"({report['summary']})")
-    out += ["", parameter_table(report["parameters"]), "", modes_table(report["modes"]), ""]
+    out += ["", parameter_table(report["parameters"]), *prior_bounds_lines(report), "",
+            modes_table(report["modes"]), ""]
     if "modes_spread" in report:
         out += [spread_table(report["modes_spread"]), ""]
     out.append(metrics_table(report["metrics"]["estimation"], "match with estimation data:"))

@@ -1,6 +1,7 @@
 """The command line per CONTRACTS section 2: exit codes, messages, report.json."""
 
 import json
+from pathlib import Path
 import subprocess
 import sys
 
@@ -147,12 +148,19 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
         assert main(["simulate", str(folder), "--flights", "8", "--seed", str(seed),
                      "--effect", "nonlinear-aero", "--strength", "1.5"]) == 0
     capsys.readouterr()
+    # the training flights come from fwid reconstruct (CONTRACTS section 5), the test ones not
+    (train / "reconstruction.json").write_text(json.dumps({"flights": [
+        {"flight": p.name, "source": "motive", "clock_offset_s": -2.0, "dropouts": [],
+         "warnings": []} for p in sorted(train.glob("*.csv"))]}))
     assert main(["diagnose", "--train", str(train), "--test", str(test), "--out", str(out),
                  "--quiet", "--no-simulation", "--no-process-noise"]) == 0
     text = capsys.readouterr().out
     assert "VERDICT: nonlinear-aero" in text
+    assert "states: 8 of 16 flights rebuilt from raw recordings by fwid reconstruct" in text
     rep = json.loads((out / "diagnosis.json").read_text())
     assert rep["verdict"] == "nonlinear-aero"
+    assert rep["states"]["reconstructed"] == "some" and len(rep["states"]["missing"]) == 8
+    assert rep["confidence_set"][0]["explanation"][0] == "nonlinear-aero"
     top = rep["candidates"][0]
     assert top["effect"] == "nonlinear-aero" and top["significant"] and top["shrink_pct"] > 0
     assert set(top["test_rms_before"]) == {"X", "Y", "Z", "L", "M", "N"}
@@ -160,6 +168,9 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
     assert (out / "gap_map.png").stat().st_size > 10_000
     assert rep["simulation"] is None and not (out / "gap_sim.png").exists()
     assert rep["process_noise"] is None  # (only with a random-disturbance verdict)
+    # where the flights are (for `fwid design --discriminate`), beside their names
+    assert [Path(p).name for p in rep["method"]["train_paths"]] == rep["train"]
+    assert all(Path(p).is_file() for p in rep["method"]["train_paths"] + rep["method"]["test_paths"])
     # bad input: exit 2, one line, the earlier report untouched
     before = (out / "diagnosis.json").read_text()
     (tmp_path / "bad").mkdir()

@@ -89,3 +89,50 @@ def lon_flight():
 @pytest.fixture(scope="session")
 def lat_flight():
     return make_flight("lat")
+
+
+# -- a small short-period case (Jategaonkar's ATTAS model), for the prior and the bounds ---
+def _short_period_f(x, u, p, c):
+    import jax.numpy as jnp
+
+    alpha, q = x
+    return jnp.stack([p["Z0"] + p["Za"] * alpha + (1 + p["Zq"]) * q + p["Zde"] * u[0],
+                      p["M0"] + p["Ma"] * alpha + p["Mq"] * q + p["Mde"] * u[0]])
+
+
+class ShortPeriod:
+    """Two 10 s records of a short-period model with white noise, the plain output-error
+    fit of the first, and the fit with Mq held at -2.3 (the reference of a bound there)."""
+
+    def __init__(self):
+        import fwid
+
+        self.model = fwid.GreyBoxModel(
+            _short_period_f, states=("alpha", "q"), inputs=("de",), name="short-period",
+            params=dict(Z0=0.0, Za=-0.5, Zq=0.0, Zde=-0.1, M0=0.0, Ma=-5.0, Mq=-2.0, Mde=-7.0))
+        truth = self.model.with_params(Za=-1.4, Zq=-0.05, Zde=-0.15, Ma=-7.0, Mq=-2.5,
+                                       Mde=-9.0)
+        t = np.arange(0.0, 10.0, 0.04)
+        rng = np.random.default_rng(0)
+        self.exps = []
+        for shift in (1.0, 2.0):  # a doublet on the elevator
+            de = 0.02 * (np.sign(np.sin(np.pi * (t - shift))) * ((t > shift) & (t < shift + 2)))
+            u = de[:, None]
+            _, y = simulate(truth, Experiment(t, u, np.zeros((t.size, 2)), x0=np.zeros(2)))
+            z = np.asarray(y) + 1e-3 * rng.normal(size=y.shape)
+            self.exps.append(Experiment(t, u, z))
+        self.plain = fwid.fit(self.model, self.exps[0])
+        self.held_mq = fwid.fit(
+            self.model.with_params(Mq=-2.3).with_free([k for k in self.model.free if k != "Mq"]),
+            self.exps[0])
+
+    def at(self, result, name):
+        return float(np.asarray(result.theta)[result.names.index(name)])
+
+    def std_cr(self, result, name):
+        return float(np.asarray(result.std_cr)[result.names.index(name)])
+
+
+@pytest.fixture(scope="session")
+def short_period():
+    return ShortPeriod()

@@ -1,0 +1,197 @@
+"""`fwid design --discriminate DIAGNOSIS_DIR`: the input that tells the diagnosis's two closest
+effects apart.
+
+`diagnosis.json` names the effects and their variants (time constants, ...) but holds neither
+the flights' paths (only their names) nor the fitted parameters of the runner-up's augmented
+model (the `simulation` block fits the verdict's alone). So both augmented models are fitted
+again here, jointly on the training flights, as the diagnosis's simulation block fits the
+verdict's (`fwid.diagnosis._simulation`): the flights come from `--train`, or from the
+`method.train_paths` that `fwid diagnose --out` now records. The models' extra inputs that
+the designed control cannot drive (the other axis's states, the flapping frequency, the
+lagging part of the states, the time) are held at zero in the prediction: effects acting only
+through them are not told apart by this input, and the output says so.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+from .._errors import InputError
+
+
+def _variant(text, axis: str = "lon"):
+    """The variant back from `diagnosis.json`'s text (`_diagnose._variant_text`)."""
+    if text is None:
+        return None
+    if text == "at once":
+        return 0.0
+    if text.startswith("terms "):  # a subset of nonlinear-aero's terms
+        from ..diagnosis._catalogue import quadratic_names
+
+        names = quadratic_names(axis)
+        try:
+            return tuple(names.index(n) for n in text[len("terms "):].split(", "))
+        except ValueError:
+            raise InputError(f"diagnosis.json: cannot read the variant {text!r}") from None
+    m = re.fullmatch(r"first-order lag, tau = ([-+0-9.eE]+) s", text)
+    if m:
+        return ("lag", float(m.group(1)))
+    m = re.fullmatch(r"delay ([-+0-9.eE]+) s", text)
+    if m:
+        return ("delay", float(m.group(1)))
+    m = re.fullmatch(r"([-+0-9.eE]+) s", text)
+    if m:
+        return float(m.group(1))
+    raise InputError(f"diagnosis.json: cannot read the variant {text!r}")
+
+
+def close_pair(diag: dict) -> list[tuple[str, object]]:
+    """The two effects the diagnosis left closest: the first effects of the first two
+    explanations of the confidence set that start with different catalogue entries (the
+    flights cannot tell them apart); for a report without a set, the first effect with a
+    near-tie runner-up, else the first effect and its runner-up; else the two best-ranked
+    candidates."""
+    variants = {c["effect"]: c.get("variant") for c in diag.get("candidates", [])}
+    axis = diag.get("axis", "lon")
+    firsts: list[str] = []
+    for x in diag.get("confidence_set") or []:
+        named = [e for e in x["explanation"] if e in variants]
+        if named and named[0] not in firsts:
+            firsts.append(named[0])
+    if len(firsts) >= 2:
+        return [(n, _variant(variants.get(n), axis)) for n in firsts[:2]]
+    rows = diag.get("effects") or []
+    pick = next((r for r in rows if r.get("near_tie")), rows[0] if rows else None)
+    if pick is not None and pick.get("runner_up"):
+        names = [pick["effect"], pick["runner_up"]["effect"]]
+    else:
+        names = [c["effect"] for c in diag.get("candidates", [])][:2]
+    if len(names) < 2:
+        raise InputError("diagnosis.json: no two candidate effects to tell apart")
+    return [(n, _variant(variants.get(n), axis)) for n in names]
+
+
+def control_map(model, axis: str, variant_of_control):
+    """`(t, u) -> model inputs`: the control (through the diagnosed lag or delay when the
+    model's first input is the acting deflection), the other inputs at zero."""
+    import jax
+    import jax.numpy as jnp
+
+    nu = len(model.inputs)
+    shift = variant_of_control
+
+    def inputs(t, u):
+        x = u
+        if shift is not None:
+            kind, tau = shift
+            dt = float(t[1] - t[0])
+            if kind == "delay":
+                x = jnp.interp(jnp.asarray(t) - tau, jnp.asarray(t), u)
+            else:
+                a = jnp.exp(-dt / tau)
+
+                def step(y, xs):
+                    x0, x1 = xs
+                    y = a * y + (1.0 - a) * 0.5 * (x0 + x1)
+                    return y, y
+                _, ys = jax.lax.scan(step, u[0], (u[:-1], u[1:]))
+                x = jnp.concatenate([u[:1], ys])
+        return jnp.zeros((u.shape[0], nu)).at[:, 0].set(x)
+    return inputs
+
+
+def discriminating_models(axis: str, pair, flights, say=None):
+    """The two augmented models of `pair` (`(effect, variant)`), each fitted jointly on
+    `flights` from the baseline's joint fit; their control maps; what is held at zero; the
+    constants and the baseline's R."""
+    import warnings
+
+    import numpy as np
+
+    from fwid.diagnosis._augment import augment
+    from fwid.identification import identify
+
+    if say:
+        say(f"re-fitting the models with {pair[0][0]} and with {pair[1][0]} on "
+            f"{len(flights)} training flights")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        base = identify(flights, axis, joint=True)
+        fitted = {k: float(v) for k, v in base.model.params.items() if k not in base.model.local}
+        models, maps, held = [], [], []
+        for name, variant in pair:
+            model, prepare, left_out = augment(axis, [(name, variant)])
+            if left_out:
+                models.append(base.model)
+                maps.append(control_map(base.model, axis, None))
+                held.append(f"{name} has no form inside the cycle-averaged EOM: the baseline "
+                            "stands for it")
+                continue
+            ident = identify([prepare(f) for f in flights], model.with_params(fitted),
+                             joint=True, start="model")
+            m = ident.model.with_params({k: 0.0 for k in ident.model.local})
+            models.append(m)
+            shift = variant if name == "actuator-dynamics" else (
+                ("delay", -float(variant)) if name == "time-offset" else None)
+            maps.append(control_map(m, axis, shift))
+            extra = list(m.inputs[1:])
+            if extra:
+                held.append(f"{name}: inputs {', '.join(extra)} held at zero (not driven by "
+                            "the control)")
+    base_model = base.model.with_params({k: 0.0 for k in base.model.local})
+    models = [base_model if m is base.model else m for m in models]
+    consts = {k: float(np.asarray(v)) for k, v in base.consts.items()
+              if k in base.model.constants}
+    return models, maps, held, consts, np.asarray(base.fit.R)
+
+
+def discriminate(args) -> int:
+    from fwid.design._design import check_limits
+
+    check_limits(args.duration, args.amplitude, args.quiet, args.rate, args.switch_rate)
+    path = Path(args.discriminate) / "diagnosis.json"
+    if not path.is_file():
+        raise InputError(f"{path}: no such file; give the folder `fwid diagnose --out DIR` "
+                         "wrote")
+    try:
+        diag = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: not JSON ({exc})") from None
+    axis = diag.get("axis")
+    if args.model is not None and args.model != axis:
+        raise InputError(f"{path}: the diagnosis is of the {axis!r} axis, not {args.model!r}")
+    pair = close_pair(diag)
+    train = args.train or diag.get("method", {}).get("train_paths")
+    if not train:
+        raise InputError(f"{path}: the diagnosis names its training flights "
+                         f"({', '.join(diag.get('train', []))}) but not where they are; give "
+                         "them with --train DATA...")
+    from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets
+
+    check_paths(train)
+    (records,) = read_sets(train, require=DIAGNOSE_COLUMNS[axis][:5], vehicle_for=axis)
+    import fwid
+    from fwid.report._design import write_discrimination
+
+    flights = fwid.data.build_flights(records)
+    say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
+    models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
+    d = fwid.design_discriminating(
+        models[0], models[1], consts=consts, R=R, amplitude=args.amplitude,
+        duration=args.duration, quiet=args.quiet, inputs_a=maps[0], inputs_b=maps[1],
+        parametrisation=args.parametrisation, switch_rate=args.switch_rate, rate=args.rate,
+        attitude={"lon": "theta", "lat": "phi"}[axis],
+        attitude_bound="3211" if args.attitude_limit is None else 0.8 * args.attitude_limit,
+        restarts=args.restarts, seed=args.seed, progress=say or False)
+    control = {"lon": "de", "lat": "dr"}[axis]
+    info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
+            "refit_on": [f.name for f in flights], "held": held,
+            "R": "the baseline's joint fit (Eq. 11)"}
+    written = write_discrimination(d, control, info, Path(args.out))
+    print(f"fwid: input telling {pair[0][0]} from {pair[1][0]}: expected difference "
+          f"{d.distance:.3g} ({d.distance / max(d.distance_3211, 1e-300):.2f}x a 3211's)")
+    print(f"fwid: {', '.join(written)} in {args.out}/")
+    return 0

@@ -1,0 +1,24 @@
+"""Test inputs designed through the identified model (CONTRACTS section 6).
+
+- `_signals.py`: the design grid, the two parametrisations (multisine with free amplitudes and
+  phases; a free piecewise-constant sequence) and the classic inputs (doublet, 3211,
+  Schroeder-phased multisine, random binary sequence);
+- `_information.py`: the Fisher information of the output-error fit as a function of the
+  input (the simulation's forward sensitivities), the per-flight biases' Schur complement,
+  the prior;
+- `_source.py`: the model, constants and noise covariance from a `report.json` or an
+  identification;
+- `_optimise.py`: Adam (optax) over random restarts side by side;
+- `_design.py`: [`fwid.design_input`][], the D-optimal input, and its `Design`;
+- `_discriminate.py`: [`fwid.design_discriminating`][], the input that best tells two models
+  apart.
+"""
+
+from ._design import Design as Design, design_input as design_input
+from ._discriminate import (
+    Discrimination as Discrimination,
+    design_discriminating as design_discriminating,
+)
+
+
+from ._signals import CLASSIC as CLASSIC, Grid as Grid

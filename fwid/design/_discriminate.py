@@ -1,0 +1,192 @@
+"""`design_discriminating`: the input that best tells two models apart.
+
+When two effects explain a gap about equally well, the two augmented models fitted to the same
+flights agree on those flights. The next flight should make them disagree: the input
+maximises the expected difference between their predicted outputs, normalised by the noise,
+`D = sum_k (y_a,k - y_b,k)^T R^-1 (y_a,k - y_b,k)` (the log-likelihood ratio one flight would
+give in favour of the true model, twice over: its expected value under either model is
+`D / 2`), under the same limits as [`fwid.design_input`][].
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._errors import InputError
+from ..models._greybox import GreyBoxModel
+from ..simulation._experiment import Experiment
+from ..simulation._simulate import simulate
+from ._design import check_limits
+from ._optimise import _say, minimise
+from ._signals import Grid, harmonics, input_3211, multisine, step_index, steps
+
+
+class Discrimination(eqx.Module):
+    """A discriminating input: `t`, `u` (the control), the two models' predicted outputs
+    `response_a`, `response_b` `(n, outputs)`, the expected difference `distance` (`D`) and
+    that of a 3211 of the same amplitude and length (`distance_3211`), `limits`,
+    `settings`."""
+
+    t: np.ndarray
+    u: np.ndarray
+    outputs: tuple
+    response_a: np.ndarray
+    response_b: np.ndarray
+    distance: float
+    distance_3211: float
+    u_3211: np.ndarray
+    limits: dict
+    settings: dict
+
+    def to_json(self) -> dict:
+        return {"criterion": {"name": "expected difference of the two models' predicted "
+                                      "outputs, sum_k d_k^T R^-1 d_k",
+                              "designed": self.distance, "3211": self.distance_3211,
+                              "ratio": self.distance / max(self.distance_3211, 1e-300)},
+                "limits": self.limits, "settings": self.settings}
+
+
+def _default_inputs(model: GreyBoxModel) -> Callable:
+    nu = len(model.inputs)
+
+    def inputs(t, u):
+        return jnp.zeros((u.shape[0], nu)).at[:, 0].set(u)
+    return inputs
+
+
+def design_discriminating(
+    model_a: GreyBoxModel,
+    model_b: GreyBoxModel,
+    *,
+    consts,
+    R,
+    amplitude: float,
+    duration: float = 5.0,
+    quiet: float = 1.0,
+    inputs_a: Callable | None = None,
+    inputs_b: Callable | None = None,
+    parametrisation: str = "steps",
+    switch_rate: float = 10.0,
+    band: tuple[float, float] = (0.0, 3.0),
+    rate: float = 100.0,
+    attitude: str | None = None,
+    attitude_bound: float | str | None = "3211",
+    restarts: int = 4,
+    iterations: int = 300,
+    seed: int = 0,
+    progress=False,
+) -> Discrimination:
+    """Design the input that maximises the noise-normalised difference of two models'
+    predicted outputs.
+
+    **Arguments:**
+    - `model_a`, `model_b`: the two models (the same outputs; each at its estimate, at trim).
+    - `consts`, `R`: the constants and the noise covariance of the outputs.
+    - `inputs_a`, `inputs_b`: `(t, u) -> (n, model inputs)`, the model's inputs for the
+      control `u` (e.g. the control through a diagnosed lag); default: `u` as the first input,
+      the others zero.
+    - `attitude`, `attitude_bound`: the output whose predicted excursion (by either model) is
+      bounded, and the bound (rad; `"3211"`: that of a 3211 of the same amplitude).
+    - the rest as in [`fwid.design_input`][].
+
+    **Returns:** a [`fwid.design.Discrimination`][].
+    """
+    check_limits(duration, amplitude, quiet, rate, switch_rate)
+    if model_a.outputs != model_b.outputs:
+        raise InputError(f"design: the two models have different outputs "
+                         f"({model_a.outputs} vs {model_b.outputs})")
+    inputs_a = inputs_a or _default_inputs(model_a)
+    inputs_b = inputs_b or _default_inputs(model_b)
+    grid = Grid(duration, quiet, rate)
+    consts = {k: jnp.asarray(v, dtype=float) for k, v in dict(consts).items()}
+    W = jnp.asarray(np.linalg.cholesky(np.linalg.inv(np.atleast_2d(R))).T)
+    att = model_a.outputs.index(attitude) if attitude in model_a.outputs else None
+
+    def responses(u):
+        out = []
+        for m, inp in ((model_a, inputs_a), (model_b, inputs_b)):
+            uu = inp(grid.t, u)
+            exp = Experiment(grid.t, uu, jnp.zeros((grid.t.size, len(m.outputs))),
+                             x0=jnp.zeros(len(m.states)), consts=consts,
+                             mask=np.ones(grid.t.size))
+            out.append(simulate(m, exp)[1])
+        return out
+
+    def distance(u):
+        ya, yb = responses(u)
+        d = (ya - yb) @ W.T
+        return jnp.sum(d**2), ya, yb
+
+    u3211 = input_3211(grid, amplitude)
+    if att is None or attitude_bound is None:
+        bound = None
+    elif attitude_bound == "3211":
+        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in responses(u3211)))
+    else:
+        bound = float(attitude_bound)
+
+    def bounded(u):
+        if bound is None:
+            return u
+        ya, yb = responses(u)
+        peak = jnp.maximum(jnp.max(jnp.abs(ya[:, att])), jnp.max(jnp.abs(yb[:, att])))
+        # a prediction that diverges (a nonlinear model) counts as over the bound
+        return u * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, bound / peak), 0.0)
+
+    if parametrisation == "multisine":
+        freqs = harmonics(grid, (max(band[0], 1e-9), band[1]))
+
+        def signal(x):
+            return multisine(x, grid, freqs, amplitude)
+
+        def start(key):
+            a, p = jax.random.split(key)
+            return jnp.concatenate([jax.random.uniform(a, (freqs.size,), minval=0.2),
+                                    jax.random.uniform(p, (freqs.size,), maxval=2 * jnp.pi)])
+    elif parametrisation == "steps":
+        _, k = step_index(grid, switch_rate)
+
+        def signal(x):
+            return steps(x, grid, switch_rate, amplitude)
+
+        def start(key):
+            return 1.5 * jax.random.normal(key, (k,))
+    else:
+        raise InputError(f"design: parametrisation must be 'multisine' or 'steps', got "
+                         f"{parametrisation!r}")
+
+    def loss(x):  # the log: the distance spans decades between starts
+        return -jnp.log(distance(bounded(signal(x)))[0] + 1e-300)
+
+    starts = jax.vmap(start)(jax.random.split(jax.random.PRNGKey(seed), restarts))
+    _say(progress, f"discriminating design: {parametrisation}, {restarts} restarts")
+    xs, fs, _ = minimise(loss, starts, iterations=iterations,
+                         learning_rate=0.05 if parametrisation == "multisine" else 0.1,
+                         progress=progress, label="discriminating design")
+    u = np.asarray(bounded(signal(jnp.asarray(xs[int(np.argmin(fs))]))))
+    D, ya, yb = distance(jnp.asarray(u))
+    if not np.isfinite(float(D)) or float(D) <= 0:
+        raise InputError("design: the two models' predictions diverge (or agree) for every "
+                         "input tried; lower the amplitude or give an attitude bound")
+    D3, ya3, yb3 = distance(jnp.asarray(u3211))
+
+    def peak(*ys):
+        return None if att is None else float(max(np.max(np.abs(np.asarray(y)[:, att]))
+                                                  for y in ys))
+
+    limits = {"amplitude_rad": amplitude, "peak_rad": float(np.max(np.abs(u))),
+              "duration_s": grid.duration, "quiet_s": grid.quiet,
+              "attitude": attitude if att is not None else None,
+              "attitude_bound_rad": bound, "attitude_peak_rad": peak(ya, yb),
+              "attitude_peak_3211_rad": peak(ya3, yb3)}
+    return Discrimination(t=grid.t, u=u, outputs=model_a.outputs, response_a=np.asarray(ya),
+                          response_b=np.asarray(yb), distance=float(D),
+                          distance_3211=float(D3), u_3211=u3211, limits=limits,
+                          settings={"parametrisation": parametrisation, "rate_hz": rate,
+                                    "restarts": restarts, "iterations": iterations,
+                                    "seed": seed})
