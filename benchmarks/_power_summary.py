@@ -37,84 +37,14 @@ def right(r: dict) -> bool | None:
     return set(r["effect"].split("+")) <= named
 
 
-def tentative_named(r: dict) -> set[str]:
-    """The effects of a result named after the first as `tentative` (`effects_detail`; for a
-    record written before the flag existed, from its recorded `rounds` by the same rule,
-    `fwid.diagnosis._selection.tentative`)."""
-    detail = r.get("effects_detail") or []
-    if detail and "tentative" in detail[0]:
-        return {e["effect"] for e in detail if e.get("tentative")}
-    from fwid.diagnosis._selection import tentative
-
-    rounds, named = r.get("rounds") or [], r.get("effects") or []
-    if len(named) < 2 or not rounds:
-        return set()
-    gain = {rd["added"]: rd["candidates"][rd["added"]]["gain_pct"] for rd in rounds
-            if rd["added"]}
-    return {e for e in named[1:] if tentative(gain[named[0]], gain[e])}
-
-
-def firmly_right(r: dict) -> bool | None:
-    """`right`, counting only the effects named firmly (not `tentative`) for a pair."""
-    ok = right(r)
-    if r["kind"] != "pair" or not ok:
-        return ok
-    return not set(r["effect"].split("+")) & tentative_named(r)
-
-
 def extras(results) -> list[str]:
-    """Single effects named right with more effects after them: firm and tentative."""
+    """Single effects named right with more effects after them."""
     rows = [r for r in results if r["kind"] == "single" and right(r)]
     more = [r for r in rows if len(r.get("effects") or []) > 1]
-    firm = [r for r in more if set(r["effects"][1:]) - tentative_named(r)]
     named = Counter(e for r in more for e in r["effects"][1:])
     return [f"Right single verdicts: {len(rows)}; with a further (spurious) effect: "
-            f"{len(more)}, of which {len(firm)} named firmly and {len(more) - len(firm)} only "
-            f"`tentative`. Further effects named: "
+            f"{len(more)}. Further effects named: "
             + (", ".join(f"{e} {k}" for e, k in named.most_common()) or "none") + "."]
-
-
-def near_tie(r: dict) -> bool | None:
-    """Was the verdict's effect or probe a near tie (`fwid.diagnosis._selection.near_tie`)?
-    The record's own `near_tie` (`None` where no row carries the flag: `none`,
-    `random-disturbance`); for an older record, from the first effect's row or the
-    `unexplained` record, or, written before the flag existed, from its first recorded round
-    by the same rule. `None`: nothing was selected."""
-    from types import SimpleNamespace as ns
-
-    from fwid.diagnosis._catalogue import CATALOGUE
-    from fwid.diagnosis._selection import MIN_GAIN, passes, runner_up
-    from fwid.diagnosis._selection import near_tie as rule
-
-    if "near_tie" in r:  # recorded as the user saw it
-        return r["near_tie"]
-    lead = (r.get("unexplained") if r.get("verdict") == "unexplained" else
-            (r.get("effects_detail") or [None])[0])
-    if lead is not None and "near_tie" in lead:
-        return bool(lead["near_tie"])
-    rounds = r.get("rounds") or []
-    if not rounds or not rounds[0]["added"]:
-        return None
-    rd = rounds[0]
-    rates = {e.name for e in CATALOGUE if e.rates}
-    ev = {k: ns(p=v["p"], gain=v["gain_pct"] / 100) for k, v in rd["candidates"].items()}
-    passing = {k: e for k, e in ev.items()
-               if k == rd["added"] or passes(ns(rates=k in rates), e, rd["level"], MIN_GAIN)}
-    return rule(runner_up(rd["added"], passing))
-
-
-def near_ties(results) -> list[str]:
-    """Right and wrong verdicts (single effects, clean, out of catalogue) with and without a
-    near tie: whether the flag tells the verdicts to doubt."""
-    rows = [(near_tie(r), right(r)) for r in results
-            if r["kind"] != "pair" and right(r) is not None]
-    out = ["| verdict | right | wrong | wrong share |", "|---|---:|---:|---:|"]
-    for label, flag in (("near tie", True), ("no near tie", False)):
-        ok = [x for f, x in rows if f is flag]
-        bad = len(ok) - sum(ok)
-        out.append(f"| {label} | {sum(ok)} | {bad} | "
-                   + (f"{100 * bad / len(ok):.0f} % |" if ok else "- |"))
-    return out
 
 
 def _frac(rows) -> str:
@@ -210,8 +140,6 @@ def pairs(results) -> list[str]:
         lines.append(f"| {r['effect']} | {r['form']} | {r['axis']} | {r['verdict']} | "
                      f"{', '.join(r.get('effects') or []) or '-'} | {'yes' if right(r) else 'no'} |")
     lines.append(f"\nBoth named: {_frac(rows)}.")
-    firm = sum(bool(firmly_right(r)) for r in rows)
-    lines.append(f"Both named, neither `tentative`: {firm}/{len(rows)}.")
     # an actuator delay or lag and a late log of the same deflection are one net shift of it
     shift = {"actuator-dynamics", "time-offset"}
     rest = [r for r in rows if set(r["effect"].split("+")) != shift]
@@ -223,6 +151,80 @@ def pairs(results) -> list[str]:
         with_e = [r for r in rows if e in r["effect"].split("+")]
         lines.append(f"| {e} | {len(with_e)} | {sum(right(r) for r in with_e)} |")
     return lines
+
+
+def _named(explanation: list[str]) -> frozenset[str]:
+    """The catalogue entries of an explanation of the confidence set (probes left out)."""
+    from fwid.diagnosis import EFFECT_NAMES
+
+    return frozenset(e for e in explanation if e in EFFECT_NAMES)
+
+
+def set_score(r: dict) -> dict | None:
+    """How a case's confidence set (`confidence_set`: explanations, best first) scores:
+    `covered` (single: an explanation names the injected effect and no other entry; pair: one
+    holds both), `holds` (an explanation names the injected effects, maybe with others), `decisive` (single: every explanation names the injected effect and no
+    other), `alarm` (clean, out of catalogue: an explanation names an entry) and `best` (the
+    best explanation's first effect as a verdict: a probe is `unexplained`, none `none`).
+    `None` without a set."""
+    kept = r.get("confidence_set")
+    if not kept:
+        return None
+    named = [_named(x["explanation"]) for x in kept]
+    first = kept[0]["explanation"]
+    from fwid.diagnosis import EFFECT_NAMES
+
+    best = "none" if not first else first[0] if first[0] in EFFECT_NAMES else "unexplained"
+    truth = frozenset(r["effect"].split("+")) if r["kind"] in ("single", "pair") else None
+    return {"covered": truth is not None and (truth in named if r["kind"] == "single"
+                                              else any(truth <= n for n in named)),
+            "holds": truth is not None and any(truth <= n for n in named),
+            "decisive": r["kind"] == "single" and all(n == truth for n in named),
+            "alarm": r["kind"] in ("clean", "out") and any(named),
+            "best": best, "size": len(kept)}
+
+
+def set_table(results) -> list[str]:
+    """Coverage, decisiveness, false alarms and pairs of the confidence set, per flight count
+    (single effects at strength 1 and all strengths), beside the verdict's rate."""
+    rows = [(r, set_score(r)) for r in results if "verdict" in r]
+    rows = [(r, s) for r, s in rows if s is not None]
+    if not rows:
+        return ["(no confidence sets recorded)"]
+    out = ["| cases | n | coverage | in an explanation | decisive | verdict right | "
+           "best explanation right | mean set size |", "|---|---|---|---|---|---|---|---|"]
+
+    def line(label, sel):
+        if not sel:
+            return
+        n = len(sel)
+        cov = sum(s["covered"] for _, s in sel)
+        dec = sum(s["decisive"] for _, s in sel)
+        holds = sum(s["holds"] for _, s in sel)
+        ok = sum(bool(right(r)) for r, _ in sel)
+        best = sum(s["best"] == r["effect"] for r, s in sel)
+        size = sum(s["size"] for _, s in sel) / n
+        out.append(f"| {label} | {n} | {cov}/{n} | {holds}/{n} | {dec}/{n} | {ok}/{n} | "
+                   f"{best}/{n} | {size:.1f} |")
+
+    single = [(r, s) for r, s in rows if r["kind"] == "single"]
+    for n in sorted({r["n"] for r, _ in single}):
+        line(f"single, strength 1, {n}+{n}",
+             [(r, s) for r, s in single if r["n"] == n and r["strength"] == 1.0])
+    line("single, all strengths", single)
+    pairs_ = [(r, s) for r, s in rows if r["kind"] == "pair"]
+    if pairs_:
+        out += ["", f"Pairs: a kept explanation holds both effects in "
+                f"{sum(s['covered'] for _, s in pairs_)}/{len(pairs_)} (both in `effects`: "
+                f"{sum(bool(right(r)) for r, _ in pairs_)}/{len(pairs_)})."]
+    quiet = [(r, s) for r, s in rows if r["kind"] in ("clean", "out")]
+    if quiet:
+        out += ["", f"False alarms: a catalogue name in the set of "
+                f"{sum(s['alarm'] for _, s in quiet)}/{len(quiet)} clean and out-of-catalogue "
+                f"cases (in the verdict: {sum(not right(r) for r, _ in quiet)}/{len(quiet)}; "
+                f"the best explanation names one in "
+                f"{sum(s['best'] not in NOT_NAMED for _, s in quiet)}/{len(quiet)})."]
+    return out
 
 
 def figure(results, path: Path) -> None:
@@ -281,8 +283,7 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "## Confusion matrix (single effects, clean, out of catalogue)", "", *confusion(results),
           "", "## Two effects at once", "", *pairs(results), "",
           "## Spurious further effects", "", *extras(results), "",
-          "## Near ties (a rival passing with at least `TIE_SHARE` of the verdict's gain)", "",
-          *near_ties(results), "",
+          "## The confidence set of explanations", "", *set_table(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
     stem.with_suffix(".md").write_text(_provenance.markdown(text))

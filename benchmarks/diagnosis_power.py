@@ -175,13 +175,8 @@ def run_case(case: dict) -> dict:
     u = getattr(diag, "unexplained", None)
     if u:
         rec["unexplained"] = {k: u.get(k) for k in ("probe", "drivers", "test_shrink_pct", "p",
-                                                    "redness_after", "runner_up", "near_tie")}
-    # the flag the user is shown: the first effect's, or the probe's of an `unexplained`
-    # verdict; `None` where no row carries one (`none`, `random-disturbance`)
-    lead = rec.get("unexplained") if diag.verdict == "unexplained" else (
-        (rec.get("effects_detail") or [None])[0])
-    rec["near_tie"] = bool(lead["near_tie"]) if lead and "near_tie" in lead else None
-    for k in ("disturbance", "first_round", "rounds"):
+                                                    "redness_after")}
+    for k in ("disturbance", "first_round", "rounds", "confidence_set"):
         if getattr(diag, k, None) is not None:
             rec[k] = getattr(diag, k)
     return rec

@@ -1,6 +1,6 @@
 """How well and how fast `fwid reconstruct` turns raw recordings into flight data (issue 32):
 the error against the simulator's exact states and loads, per band, and the whole process
-on 16 takes of 60 s; beside it, what a Python user writes instead (`_fd_baseline.py`).
+on 16 takes of 60 s; beside it, what a Python user writes instead (`peers/finite_differences.py`).
 
     python benchmarks/reconstruction.py [--quick] [--no-speed] [--out benchmarks/results/reconstruction.json]
 
@@ -20,7 +20,7 @@ frequency), RMS error in % of the truth's RMS in the band. Medians over the take
 `clock_ms`: the largest |estimated - true| clock offset [ms].
 
 **Methods.** `fwid`: `fwid reconstruct RAW --out DIR [--body DelFly]` as a process (the CLI is
-the contract; nothing of fwid's internals is used). `baseline`: `benchmarks/_fd_baseline.py`
+the contract; nothing of fwid's internals is used). `baseline`: `benchmarks/peers/finite_differences.py`
 as a process (finite differences of positions and scipy Euler angles after a 40 Hz
 Butterworth, the same load equations; it is handed the true clock offset).
 
@@ -32,7 +32,6 @@ and the baseline, each run once.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import platform
@@ -47,6 +46,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # this checkout's fwid
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # _provenance
 
 LON = ("q", "u", "w", "theta", "X", "Z", "M")
 DEFAULT = {"raw": "motive", "position_noise": 0.4, "rate": 200.0, "dropouts": 0.005, "clock_offset": None}
@@ -64,10 +64,12 @@ def grid(quick: bool) -> list[dict]:
     cases += [(f"dropouts {100 * d:g} %", {"dropouts": d}) for d in drops]
     cases += [(f"clock offset {o:g} s", {"clock_offset": o}) for o in offsets]
     cases += [("fwid raw CSV (NED)", {"raw": "fwid"})]
+    cases += [("take of 30 s", {"duration": 30.0})]
     return [{"case": name, **DEFAULT, **over} for name, over in cases]
 
 
 def simulate(folder: Path, case: dict, takes: int, duration: float, seed: int) -> None:
+    duration = case.get("duration", duration)
     from fwid.synth import write_raw_flights
 
     noise = case["position_noise"]
@@ -78,15 +80,18 @@ def simulate(folder: Path, case: dict, takes: int, duration: float, seed: int) -
     write_raw_flights(folder, raw=case["raw"], n_flights=takes, seed=seed, duration=duration, **kw)
 
 
-def run(cmd: list[str]) -> tuple[float, subprocess.CompletedProcess]:
+def run(cmd: list[str], timeout: float = 1800.0) -> tuple[float, subprocess.CompletedProcess]:
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    try:
+        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc = subprocess.CompletedProcess(cmd, 124, "", f"timed out after {timeout:.0f} s")
     return time.perf_counter() - t0, proc
 
 
-def fwid_reconstruct(raw: Path, out: Path, form: str) -> tuple[float, subprocess.CompletedProcess]:
+def fwid_reconstruct(raw: Path, out: Path, form: str, timeout: float = 1800.0) -> tuple[float, subprocess.CompletedProcess]:
     cmd = [sys.executable, "-m", "fwid.cli", "reconstruct", str(raw), "--out", str(out)]
-    return run(cmd + (["--body", "DelFly"] if form == "motive" else []))
+    return run(cmd + (["--body", "DelFly"] if form == "motive" else []), timeout)
 
 
 def baseline(raw: Path, out: Path) -> tuple[float, subprocess.CompletedProcess]:
@@ -94,7 +99,7 @@ def baseline(raw: Path, out: Path) -> tuple[float, subprocess.CompletedProcess]:
                for p in (raw / "truth").glob("*.json") if p.stem != "vehicle"}
     off = raw.parent / f"{out.name}-offsets.json"
     off.write_text(json.dumps(offsets))
-    return run([sys.executable, str(HERE / "_fd_baseline.py"), str(raw), str(out),
+    return run([sys.executable, str(HERE / "peers" / "finite_differences.py"), str(raw), str(out),
                 "--clock-offsets", str(off)])
 
 
@@ -152,7 +157,7 @@ def one_case(case: dict, takes: int, duration: float, seed: int, work: Path) -> 
     raw = work / "raw"
     t0 = time.perf_counter()
     simulate(raw, case, takes, duration, seed)
-    res = dict(case, takes=takes, duration_s=duration, simulate_s=time.perf_counter() - t0)
+    res = dict(case, takes=takes, duration_s=case.get("duration", duration), simulate_s=time.perf_counter() - t0)
     for name, fn in (("fwid", lambda o: fwid_reconstruct(raw, o, case["raw"])),
                      ("baseline", lambda o: baseline(raw, o))):
         out = work / name
@@ -175,7 +180,7 @@ def speed(work: Path, takes: int, duration: float) -> dict:
     cache = work / "jax-cache"  # an empty compilation cache: cold, then warm
     os.environ["FWID_JAX_CACHE"] = str(cache)
     for label in ("fwid_cold", "fwid_warm"):
-        wall, proc = fwid_reconstruct(raw, work / label, "motive")
+        wall, proc = fwid_reconstruct(raw, work / label, "motive", timeout=600.0)
         res[label] = {"wall_s": wall, "rc": proc.returncode}
         if proc.returncode != 0:
             res[label]["error"] = (proc.stderr.strip().splitlines() or ["?"])[-1]
@@ -197,10 +202,11 @@ def _fmt(x, nd=1):
 
 def markdown(res: dict) -> str:
     lines = ["# Reconstruction: raw takes to flight data, against the simulator's truth", "",
-             f"`{res['command']}` (commit {res['commit']}, {res['date']}; {res['machine']})", "",
+             f"Machine: {res['machine']}, load average {res['load_start']:.1f} at start, "
+             f"{res.get('load_end', 0):.1f} at end.", "",
              "Errors in %: cycle-averaged (< 5 Hz) RMS error of the excursion; flapping harmonics "
              "h1-h3 RMS error of the band's RMS; medians over the takes. fwid: `fwid reconstruct` as a "
-             "process; baseline: finite differences after a 40 Hz Butterworth (`_fd_baseline.py`, "
+             "process; baseline: finite differences after a 40 Hz Butterworth (`peers/finite_differences.py`, "
              "given the true clock offset). See the script's docstring.", ""]
     head = ("| case | method | " + " | ".join(f"{c} ca" for c in LON) + " | M h1 | M h2 | M h3 | "
             "Z h1 | Z h2 | Z h3 | clock ms | wall s |")
@@ -219,6 +225,7 @@ def markdown(res: dict) -> str:
     sp = res.get("speed")
     if sp:
         lines += ["", f"## Speed: {sp['takes']} takes of {sp['duration_s']:g} s at 200 Hz, whole process", "",
+                  "Each run once, on a machine shared with other work (load in the JSON).", "",
                   "| run | wall s | q ca % | Z ca % | M ca % | M h1 % |", "|---|---:|---:|---:|---:|---:|"]
         for label in ("fwid_cold", "fwid_warm", "baseline"):
             r = sp[label]
@@ -238,15 +245,18 @@ def main(argv=None) -> None:
     ap.add_argument("--no-speed", action="store_true", help="skip the 16 x 60 s speed row")
     ap.add_argument("--takes", type=int, default=None, help="takes per case (2; quick: 1)")
     ap.add_argument("--duration", type=float, default=None, help="seconds per take (10; quick: 6)")
+    ap.add_argument("--speed-takes", type=int, default=None, help="takes of the speed row (16; quick: 4)")
+    ap.add_argument("--speed-duration", type=float, default=None,
+                    help="seconds per take of the speed row (60; quick: 20)")
     ap.add_argument("--out", default=str(HERE / "results" / "reconstruction.json"))
     args = ap.parse_args(argv)
     takes = args.takes or (1 if args.quick else 2)
     duration = args.duration or (6.0 if args.quick else 10.0)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                            text=True).stdout.strip()
-    res = {"command": "python benchmarks/reconstruction.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-           "commit": commit, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-           "machine": f"{platform.machine()}, {os.cpu_count()} CPUs", "cases": []}
+    import _provenance
+
+    prov = _provenance.provenance(None if argv is None else [sys.argv[0], *argv])
+    res = {"provenance": prov, "machine": f"{platform.machine()}, {os.cpu_count()} CPUs", "load_start": os.getloadavg()[0],
+           "cases": []}
     for i, case in enumerate(grid(args.quick)):
         with tempfile.TemporaryDirectory() as tmp:
             r = one_case(case, takes, duration, 100 + i, Path(tmp))
@@ -257,13 +267,15 @@ def main(argv=None) -> None:
         print(f"{r['case']}: fwid {show(f)} | baseline {show(b)}", flush=True)
     if not args.no_speed:
         with tempfile.TemporaryDirectory() as tmp:
-            res["speed"] = speed(Path(tmp), 4 if args.quick else 16, 20.0 if args.quick else 60.0)
+            res["speed"] = speed(Path(tmp), args.speed_takes or (4 if args.quick else 16),
+                                 args.speed_duration or (20.0 if args.quick else 60.0))
         print(json.dumps({k: v for k, v in res["speed"].items() if not isinstance(v, dict)}), flush=True)
+    res["load_end"] = os.getloadavg()[0]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1) + "\n")
-    out.with_suffix(".md").write_text(markdown(res))
-    print(markdown(res))
+    out.write_text(_provenance.json_text(res, prov, indent=1))
+    out.with_suffix(".md").write_text(_provenance.markdown(markdown(res), prov))
+    print(_provenance.markdown(markdown(res), prov))
     print(f"wrote {out} and {out.with_suffix('.md')}")
 
 

@@ -64,7 +64,7 @@ EXPORTS = {
         "initialize_distributed", "prior_from", "prior_information",
     ),
     "diagnosis": (
-        "CATALOGUE", "Diagnosis", "diagnose",
+        "CATALOGUE", "Diagnosis", "diagnose", "read_reconstruction",
     ),
     "validate": (
         "StateSpace", "eigenvalues", "state_space", "fit_metrics", "modes",

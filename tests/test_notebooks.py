@@ -72,3 +72,17 @@ def test_diagnosis_notebook_runs(tmp_path):
     line = next(ln for ln in text.splitlines() if ln.startswith("simulated-state shrink"))
     assert float(line.split(":")[1].split("%")[0]) >= 20.0  # the lag in the EOM closes the gap
     assert len(images) >= 3  # the gap map, the residual in time, the simulated states
+
+
+@pytest.mark.slow
+def test_reconstruction_notebook_runs(tmp_path):
+    outputs, text, images = _execute("05_reconstruction.ipynb", tmp_path)
+    assert "Format Version,1.23" in text and "lon_0.onboard.csv" in text
+    for line in text.splitlines():
+        if "clock offset" in line and "error" in line:  # found within 2 ms of the truth
+            assert float(line.split("error ")[1].split(" ms")[0]) < 2.0, line
+        if line.startswith("eigenvalue: true -1.35"):  # the oscillatory mode within 5 %
+            assert float(line.split("error ")[1].split(" %")[0]) < 5.0, line
+    assert text.count("cycle-averaged error") == 7
+    assert "eigenvalue: true -1.35" in text
+    assert len(images) >= 1  # the reconstruction figure

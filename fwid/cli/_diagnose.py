@@ -20,8 +20,13 @@ def diagnose(args) -> int:
     train_records, test_records = train, test
     train, test = fwid.data.build_flights(train), fwid.data.build_flights(test)
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
+    from fwid.diagnosis import read_reconstruction
+
     diag = fwid.diagnose(train, test, axis=args.axis, simulation=not args.no_simulation,
-                         process_noise=not args.no_process_noise, progress=say)
+                         process_noise=not args.no_process_noise,
+                         reconstruction=read_reconstruction(
+                             [r.path for r in train_records + test_records]),
+                         progress=say)
     # where the flights are (diagnosis.json's `train` and `test` name them only): for
     # `fwid design --discriminate`, which fits the two closest effects' models again
     diag.settings = {**diag.settings,

@@ -22,12 +22,20 @@ from pathlib import Path
 from .._errors import InputError
 
 
-def _variant(text):
+def _variant(text, axis: str = "lon"):
     """The variant back from `diagnosis.json`'s text (`_diagnose._variant_text`)."""
     if text is None:
         return None
     if text == "at once":
         return 0.0
+    if text.startswith("terms "):  # a subset of nonlinear-aero's terms
+        from ..diagnosis._catalogue import quadratic_names
+
+        names = quadratic_names(axis)
+        try:
+            return tuple(names.index(n) for n in text[len("terms "):].split(", "))
+        except ValueError:
+            raise InputError(f"diagnosis.json: cannot read the variant {text!r}") from None
     m = re.fullmatch(r"first-order lag, tau = ([-+0-9.eE]+) s", text)
     if m:
         return ("lag", float(m.group(1)))
@@ -41,9 +49,20 @@ def _variant(text):
 
 
 def close_pair(diag: dict) -> list[tuple[str, object]]:
-    """The two effects the diagnosis left closest: the first effect with a near-tie runner-up,
-    else the first effect and its runner-up, else the two best-ranked candidates."""
+    """The two effects the diagnosis left closest: the first effects of the first two
+    explanations of the confidence set that start with different catalogue entries (the
+    flights cannot tell them apart); for a report without a set, the first effect with a
+    near-tie runner-up, else the first effect and its runner-up; else the two best-ranked
+    candidates."""
     variants = {c["effect"]: c.get("variant") for c in diag.get("candidates", [])}
+    axis = diag.get("axis", "lon")
+    firsts: list[str] = []
+    for x in diag.get("confidence_set") or []:
+        named = [e for e in x["explanation"] if e in variants]
+        if named and named[0] not in firsts:
+            firsts.append(named[0])
+    if len(firsts) >= 2:
+        return [(n, _variant(variants.get(n), axis)) for n in firsts[:2]]
     rows = diag.get("effects") or []
     pick = next((r for r in rows if r.get("near_tie")), rows[0] if rows else None)
     if pick is not None and pick.get("runner_up"):
@@ -52,7 +71,7 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
         names = [c["effect"] for c in diag.get("candidates", [])][:2]
     if len(names) < 2:
         raise InputError("diagnosis.json: no two candidate effects to tell apart")
-    return [(n, _variant(variants.get(n))) for n in names]
+    return [(n, _variant(variants.get(n), axis)) for n in names]
 
 
 def control_map(model, axis: str, variant_of_control):

@@ -8,3 +8,4 @@ from ._diagnose import Diagnosis as Diagnosis
 from ._diagnose import diagnose as diagnose
 from ._gapmap import BAND_NAMES as BAND_NAMES
 from ._gapmap import gap_map as gap_map
+from ._provenance import read_reconstruction as read_reconstruction

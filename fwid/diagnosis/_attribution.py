@@ -18,9 +18,9 @@ The loads of the axis that was not manoeuvred (the lateral ones in a longitudina
 take only the effects whose columns there carry the manoeuvre or belong to neither axis
 (`Effect.crosses_axes`: the coupling, the flapping modulated by every state, the flapping
 frequency, a drift; `Engine.allowed`). That axis's own states, attitude and control barely
-move, so columns built from them fit only what their noise hides from the baseline: an
-outside simulator's clean longitudinal flights were `unexplained` (the attitude probe on L,
-through the roll angle) and its real effects lost to that probe (2026-11-24, fifth session).
+move, so columns built from them fit only what their noise hides from the baseline (the
+attitude probe on L, through a roll angle that hardly moves, would make clean longitudinal
+flights `unexplained`).
 """
 
 from __future__ import annotations
@@ -185,10 +185,16 @@ class Engine:
 
     def best_variant(self, idx, model: Model, effect: Effect, sigma2: dict):
         """The variant of `effect` (added to `model`) with the least training error on units
-        `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's)."""
+        `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's); for
+        an effect whose variants differ in size (`Effect.sized`), the least
+        leave-one-unit-out error instead (with fewer than three units, the training error)."""
         if len(effect.variants) == 1:
             return effect.variants[0]
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
+        if effect.sized and len(idx) >= 3:
+            costs = [sum(self.loo_error(idx, ch, model + ((effect, v),)) / sigma2[ch]
+                         for ch in chans) for v in effect.variants]
+            return effect.variants[int(np.argmin(costs))]
         costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
                      for ch in chans) for v in effect.variants]
         return effect.variants[int(np.argmin(costs))]
@@ -199,14 +205,18 @@ class Engine:
         model fitted on the others, its local terms its own) it lowers. No threshold: a
         column set that only fits noise raises that error. Every load for an effect that
         replaces the deflection, or with fewer than three units. Only the loads it is
-        `allowed` on."""
+        `allowed` on. For an effect whose variants differ in size (`Effect.sized`) the whole
+        family (its first variant) decides the loads: its best subset, chosen by the same
+        leave-one-flight-out error, would beat the baseline on noise alone (the least of
+        many such errors is biased low)."""
         v = self.best_variant(idx, model, effect, sigma2)
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         every = OnLoads(v, tuple(ld for ld, _ in chans))
         if len(idx) < 3 or effect.replaces_input:
             return every
+        judge = OnLoads(effect.variants[0], every.loads) if effect.sized else every
         loads = tuple(ch[0] for ch in chans
-                      if self.loo_error(idx, ch, model + ((effect, every),))
+                      if self.loo_error(idx, ch, model + ((effect, judge),))
                       < self.loo_error(idx, ch, model))
         return OnLoads(v, loads)
 

@@ -144,7 +144,10 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
                 add_input(s, None)
         elif name == "nonlinear-aero":
             xs_idx = [state_index[s] for s in AXIS_STATES[axis]]
-            for suffix, g in _quadratic_terms(axis):
+            chosen = _quadratic_terms(axis)
+            if variant is not None:  # a subset of the terms (`_catalogue.QUADRATIC_SUBSETS`)
+                chosen = [chosen[k] for k in variant]
+            for suffix, g in chosen:
                 terms.append((f"_{suffix}", lambda x, ue, g=g: g(x[jnp.array(xs_idx)])))
         elif name == "drift":
             add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))

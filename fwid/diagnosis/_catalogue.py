@@ -10,7 +10,10 @@ is the generic first term of its physical family.
   modulation, the sidebands `n f +- f_manoeuvre` of a linear time-periodic system).
 - `nonlinear-aero`: second-order terms of the cycle-averaged states of the load's axis:
   `x^2`, `x|x|` and the cross products (the next terms of the Taylor series behind Eq. 2;
-  `|x| x` is quadratic drag).
+  `|x| x` is quadratic drag), as a family of matched capacity: its size, from one term to the
+  whole group (`QUADRATIC_SUBSETS`), is chosen by leave-one-flight-out error on the fitting
+  flights, so that a single quadratic term is not lost in the noise the other eight columns
+  fit, and the whole group wins only when it predicts flights it was not fitted to.
 - `lon-lat-coupling`: the other axis's states and control drive the load (Eqs. 2 and 5 with
   the cross terms the paper leaves out).
 - `actuator-dynamics`: the deflection that acts is the measured one through a first-order lag
@@ -26,24 +29,11 @@ is the generic first term of its physical family.
   the effect (M through w and u, Z through q and u, ...). Those rates also carry what a gust
   does to the other loads, so when the residual stays red after it (`_disturbance.py`) it was
   a proxy of a disturbance: it is set aside and the selection runs again without it
-  (`random-disturbance` unless that names an effect). Lagging instead the
-  states simulated from the deflection by the flight's own linear model (`x' = A x + B d + c`
-  fitted by equation error, which carry no load) was tried on 2026-11-24 and not adopted: on
-  clean development flights those noise-free states predict what the measured states' noise
-  hides from the baseline (errors in the variables: 9 of 24 clean cases named
-  `unsteady-aero`), and tested given the model states themselves their lagging parts add
-  nothing (to first order in `tau` they are `-tau (A x + B d)`, in the span of the states and
-  the deflection: 0 of 12 strength-1 development `unsteady-aero` cases named). Nor was
-  projecting the lagged residuals of the loads a state's rate carries out of its column
-  (so that it could follow another effect): the lagged states of the loads' model carry
-  their own loads again, and on the development half it named `unsteady-aero` after 27 of
-  the first 153 cases' first effects, falsely. Making it a probe instead (its verdict
-  `unexplained`, as issue 12 counts an unsteady lag outside the catalogue) was measured on the
-  development half on 2026-11-24 (sixth session): false alarms 1 instead of 4 of 60, the other
-  six entries' single effects 259 instead of 260 of 288, pairs without it 24 instead of 25 of
-  30, the other effect of its pairs named 10 instead of 11 of 12, and the 28 of 48 true lags
-  it names lose their name. Not adopted: it would undo issue 16's entry, which is the
-  catalogue owner's call.
+  (`random-disturbance` unless that names an effect). The measured states are lagged, not
+  states simulated from the deflection by a linear model: such noise-free states predict
+  what the measured states' noise hides from the baseline (errors in the variables), and to
+  first order in `tau` their lagging parts `-tau (A x + B d)` lie in the span of the states
+  and the deflection, so they add nothing.
 - `time-offset`: the logged deflection is late against the states (a clock offset between the
   logs; `actuator-dynamics` covers the deflection acting *after* it is logged, which a
   time offset of the other sign cannot be told from): the deflection shifted earlier by a lead
@@ -98,6 +88,25 @@ def _flap_coupling(s, load, variant, h, dh):
     return np.stack([x * h for x in xs] + [x * dh for x in xs], axis=1)
 
 
+def quadratic_names(axis: str) -> list[str]:
+    """The names of `nonlinear-aero`'s columns on `axis`, in their order: per state `xx` and
+    `x|x|`, then the cross products."""
+    xs = AXIS_STATES[axis]
+    out = []
+    for x in xs:
+        out += [f"{x}{x}", f"{x}|{x}|"]
+    out += [f"{xs[i]}{xs[j]}" for i in range(len(xs)) for j in range(i + 1, len(xs))]
+    return out
+
+
+#: `nonlinear-aero`'s variants: subsets of its columns (indices into `quadratic_names`), from
+#: one term to the whole group, chosen by leave-one-flight-out error (`Effect.sized`): each
+#: single term, each state's pair, the even part (squares, cross products), the odd part
+#: (`x|x|`), and all (`None`).
+QUADRATIC_SUBSETS = ((None,) + tuple((k,) for k in range(9))
+                     + ((0, 1), (2, 3), (4, 5), (0, 2, 4, 6, 7, 8), (1, 3, 5)))
+
+
 def _nonlinear(s, load, variant, h, dh):
     xs = [_slow(s, x) for x in AXIS_STATES[axis_of(load)]]
     cols = []
@@ -106,6 +115,8 @@ def _nonlinear(s, load, variant, h, dh):
     for i in range(len(xs)):
         for j in range(i + 1, len(xs)):
             cols.append(xs[i] * xs[j])
+    if variant is not None:
+        cols = [cols[k] for k in variant]
     return np.stack(cols, axis=1)
 
 
@@ -193,6 +204,10 @@ class Effect:
     #: other axis's own states, attitude or control, which hardly move, its columns there
     #: would only fit what their noise hides from the baseline (`Engine.allowed`).
     crosses_axes: bool = False
+    #: Do its variants differ in size (subsets of a family of columns)? Then the variant is
+    #: chosen by leave-one-flight-out error on the fitting flights, not by training error,
+    #: which always prefers the largest (`Engine.best_variant`).
+    sized: bool = False
 
 
 CATALOGUE: tuple[Effect, ...] = (
@@ -208,6 +223,8 @@ CATALOGUE: tuple[Effect, ...] = (
         "cycle-averaged loads quadratic in the states (x^2, x|x|, cross products)",
         "averaged",
         _nonlinear,
+        QUADRATIC_SUBSETS,
+        sized=True,
     ),
     Effect(
         "lon-lat-coupling",

@@ -4,24 +4,23 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from .._errors import DiagnosisWarning, ExcitationError
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
-from ._catalogue import CATALOGUE, Effect
+from ._catalogue import CATALOGUE, Effect, quadratic_names
+from ._confidence import LEVEL, as_rows, confidence_set, explanations, sequential
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
+from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
 from ._simulation import SimulationGap, simulation_gap
-from ._selection import (ALPHA, MIN_GAIN, SECONDARY_SHARE, TIE_SHARE, forward_select,
-                         near_tie, tentative)
+from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
-from ._signals import AXIS_INPUT, AXIS_LOADS, BANDS, LOADS, check_axis, other, signals
+from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
 
 
 @dataclasses.dataclass
@@ -42,7 +41,9 @@ class Diagnosis:
     `gain_pct` and `blocks`, and the effect it `added`, `None` in the round that stopped; why
     a candidate was or was not added), and the held-out load residuals before (`residuals`)
     and after each candidate or probe (`augmented[name]`), by test flight and load, for
-    figures."""
+    figures; `confidence_set` (the explanations the held-out blocks cannot tell from the
+    best, best first, `_confidence.py`) and `states` (whether the states came from
+    `fwid reconstruct`, `_provenance.py`)."""
 
     axis: str
     train: list[str]
@@ -63,6 +64,8 @@ class Diagnosis:
     simulation: dict | None = None
     process_noise: dict | None = None
     models: SimulationGap | None = dataclasses.field(default=None, repr=False)
+    confidence_set: list[dict] = dataclasses.field(default_factory=list)
+    states: dict | None = None
     settings: dict = dataclasses.field(default_factory=dict)
 
     def candidate(self, name: str) -> dict:
@@ -90,10 +93,12 @@ class Diagnosis:
             "train": self.train,
             "test": self.test,
             "candidates": self.candidates,
+            "confidence_set": self.confidence_set,
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
             "process_noise": self.process_noise,
+            "states": self.states,
             "simulation": self.simulation,
             "localisation": self.localisation,
             "first_round": self.first_round,
@@ -102,36 +107,17 @@ class Diagnosis:
         }
 
 
-def _variant_text(v) -> str | None:
+def _variant_text(v, axis: str = "lon") -> str | None:
     v = unwrap(v)
     if v is None:
         return None
     if isinstance(v, float):  # a time constant or lead (0: at once)
         return f"{v:g} s" if v else "at once"
+    if all(isinstance(k, int) for k in v):  # a subset of nonlinear-aero's terms
+        names = quadratic_names(axis)
+        return "terms " + ", ".join(names[k] for k in v)
     kind, tau = v
     return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
-
-
-def _check_excitation(sigs, axis: str) -> None:
-    d = AXIS_INPUT[axis]
-    moves = [np.ptp(s.slow[d]) for s in sigs]
-    if max(moves) < 1e-3:  # rad: a twentieth of a degree
-        raise ExcitationError(
-            f"too little excitation to diagnose the {axis} axis: '{d}' moves by at most "
-            f"{max(moves):.2g} rad in the training flights ({', '.join(s.name for s in sigs)}); "
-            "use flights with a manoeuvre (a 3211 or doublet on the control)"
-        )
-    o = AXIS_INPUT[other(axis)]
-    if all(o in s.slow for s in sigs):
-        theirs = np.median([np.std(s.slow[o]) for s in sigs])
-        ours = np.median([np.std(s.slow[d]) for s in sigs])
-        if theirs > 3.0 * ours:
-            warnings.warn(
-                f"the training flights look like {other(axis)} manoeuvres: '{o}' moves "
-                f"{theirs / max(ours, 1e-12):.0f} times more than '{d}' (median standard "
-                f"deviation), but the {axis} axis is diagnosed; pass axis='{other(axis)}' "
-                f"(CLI: --axis {other(axis)}) to diagnose the manoeuvre flown",
-                DiagnosisWarning, stacklevel=3)
 
 
 #: A load is affected by an effect when its held-out gain is at least this share of the
@@ -165,6 +151,7 @@ def diagnose(
     folds: int | None = None,
     simulation: bool = True,
     process_noise: bool = True,
+    reconstruction: Sequence[dict | None] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """Diagnose the sim-to-real gap of the paper's model on held-out flights.
@@ -184,13 +171,13 @@ def diagnose(
        band, and judged by a one-sided t test across blocks (`_significance.py`). Effects are
        added by forward selection while one passes at `alpha` divided by the candidates still
        in play (`_selection.py`): `effects` lists them in the order added, each with its
-       held-out gain relative to the first's (`relative_gain`); one named after the first with
-       less than `SECONDARY_SHARE` of it is `tentative`: it may be the misfit that the first
-       effect's form leaves, not a second effect. Each row names its `runner_up` (the other
-       candidate that passed in its round with the largest gain, and its `gain_ratio`); a
-       rival with at least `TIE_SHARE` of its gain is a `near_tie`: the data barely tell the
-       two apart (every effect row and the `unexplained` probe carry it; the ratio exceeds 1
-       when the rival is an entry built on rates that gave way, `_selection.RATES_MARGIN`).
+       held-out gain relative to the first's (`relative_gain`).
+       How sure the choice is, the **confidence set** says (`_confidence.py`): every
+       explanation (none, each candidate or probe, the pairs of the best four, the
+       selection's model) that the held-out blocks cannot reject against the best at
+       `_confidence.LEVEL` (Hansen, Lunde & Nason's model confidence set), best first, each
+       with its held-out gain and p value (`confidence_set`). Two or more kept: the data
+       cannot tell them apart; a pair kept: both effects may be there.
     2. **How far**: baseline and candidates are re-fitted on the training flights only and
        scored on the test flights: RMS per load before and after, and `shrink_pct`, the drop
        of the RMS of the affected loads (each relative to its baseline RMS).
@@ -212,8 +199,10 @@ def diagnose(
        the catalogue effects the disturbance hid (`random-disturbance` when it names none
        first: a probe would track the disturbance too).
 
-    `verdict` is the first effect selected, `"unexplained"`, `"random-disturbance"`, or
-    `"none"`. Each candidate carries its p value,
+    `verdict` is the first effect of the confidence set's best explanation (least held-out
+    loss, each effect charged its smallest gain; `effects` are its catalogue effects, a probe
+    first makes it `"unexplained"`; the selection's own model when they agree), then the
+    colour rules above: `"unexplained"`, `"random-disturbance"`, or `"none"`. Each candidate carries its p value,
     a `confidence` (one minus the p value corrected over the candidates in play) and the
     detection limit: the held-out error reduction the test would have seen with 80 % power.
 
@@ -229,7 +218,10 @@ def diagnose(
     simulated on the test flights; `Diagnosis.models` keeps both identifications),
     `process_noise` (with a `"random-disturbance"` verdict, also fit the baseline by filter
     error on the training flights, Jategaonkar Ch. 5, `_process_noise.py`: the process noise
-    as evidence; a failed fit is recorded in the block, never raised), `progress` (called with a line of text at each stage).
+    as evidence; a failed fit is recorded in the block, never raised), `reconstruction`
+    (per training then test flight, its entry in the `reconstruction.json` beside it, as
+    `read_reconstruction` returns them: reported beside the verdict as the `states` block,
+    `_provenance.py`), `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
     check_axis(train, axis, "training")
@@ -241,7 +233,7 @@ def diagnose(
     say(f"decomposing {len(train)} training and {len(test)} test flights")
     tr_sig = [signals(f, cutoff=cutoff) for f in train]
     te_sig = [signals(f, cutoff=cutoff) for f in test]
-    _check_excitation(tr_sig, axis)
+    check_excitation(tr_sig, axis)
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
@@ -304,17 +296,15 @@ def diagnose(
         """The rows of the catalogue effects `sel` chose (`effects`), what its first probe says
         (`unexplained`), and the `(name, variant)` of the effects for the simulation."""
         effects, unexplained, model, prev, in_sim = [], None, (), rms_before, []
-        for (e, ev), rival in zip(sel.chosen, sel.rivals):
+        for e, ev in sel.chosen:
             model = model + ((e, engine.choose(train_idx, model, e, sigma2)),)
             res = test_residuals(model)
             now = rms_by_load([full(r) for r in res])
             affected = affected_loads(ev)
-            row = {"effect": e.name, "variant": _variant_text(model[-1][1]),
+            row = {"effect": e.name, "variant": _variant_text(model[-1][1], axis),
                    "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
                    "shrink_pct": shrink(prev, now, affected),
-                   "test_rms_before": prev, "test_rms_after": now,
-                   "runner_up": rival}
-            row["near_tie"] = near_tie(row["runner_up"])
+                   "test_rms_before": prev, "test_rms_after": now}
             prev = now
             if e.rates and not effects and unexplained is None:
                 row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
@@ -322,7 +312,6 @@ def diagnose(
             if e.name in named and unexplained is None:
                 first = sel.chosen[0][1]
                 row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
-                row["tentative"] = bool(effects) and tentative(first.gain, ev.gain)
                 effects.append(row)
                 in_sim.append((e.name, unwrap(model[-1][1])))
             elif e.name in named:  # after structure outside the catalogue: it may only echo it
@@ -333,8 +322,7 @@ def diagnose(
                                "test_shrink_pct": row["shrink_pct"], "p": ev.p,
                                "variant": row["variant"], "affected": affected,
                                "redness_after": colour(slow_part(res), dts, own,
-                                                       own_scale)["redness"], "then": [],
-                               "runner_up": row["runner_up"], "near_tie": row["near_tie"]}
+                                                       own_scale)["redness"], "then": []}
         return effects, unexplained, in_sim
 
     disturbance = colour(slow_part(base_res), dts, own, own_scale)
@@ -355,6 +343,29 @@ def diagnose(
         effects, unexplained, in_sim = name_effects(sel)
         if not effects:  # a probe first on the same residual tracks the disturbance too
             unexplained = None
+    say("the confidence set of explanations (model confidence set over the held-out blocks)")
+    # an entry built on rates set aside as a proxy of a disturbance explains nothing here
+    pool = tuple(e for e in tuple(catalogue) + tuple(probes)
+                 if not (e.rates and "proxy" in disturbance))
+    found = explanations(engine, halves, set_aside.first, pool, [e for e, _ in sel.chosen])
+    best = confidence_set(found)
+    if [e.name for e in best[0].effects] != [e.name for e, _ in sel.chosen]:
+        # the verdict is the best explanation's: its effects as if selected in that order
+        sel = dataclasses.replace(sel, chosen=sequential(engine, halves, set_aside.first,
+                                                         best[0].effects))
+        effects, unexplained, in_sim = name_effects(sel)
+        if effects and effects[0].get("redness_after") is not None and rates_proxy(
+                effects[0], disturbance):  # as above: a proxy of a disturbance
+            disturbance["proxy"] = {k: effects[0][k] for k in (
+                "effect", "variant", "p", "shrink_pct", "redness_after", "shortest_lag")}
+            found = [x for x in found if not any(e.rates for e in x.effects)]
+            best = confidence_set(found)
+            sel = dataclasses.replace(sel, chosen=sequential(engine, halves, set_aside.first,
+                                                             best[0].effects))
+            effects, unexplained, in_sim = name_effects(sel)
+        if "proxy" in disturbance and not effects:  # a probe tracks the disturbance too
+            unexplained = None
+    kept = as_rows(best, found[0])
     chosen = [e.name for e, _ in sel.chosen]
     last, levels = {**set_aside.last, **sel.last}, {**set_aside.level, **sel.level}
     augmented: dict = {}
@@ -383,7 +394,7 @@ def diagnose(
             "test_rms_after": rms_after,
             "affected": affected,
             "band": e.band,
-            "variant": _variant_text(variant),
+            "variant": _variant_text(variant, axis),
             "acts_on": list(variant.loads),
             "p": ev.p,
             "confidence": max(0.0, 1.0 - ev.p * alpha / level),
@@ -454,6 +465,8 @@ def diagnose(
         residuals=before,
         augmented=augmented,
         measured=measured,
+        confidence_set=kept,
+        states=provenance([f.name for f in flights], reconstruction),
         settings={
             "baseline": "Eqs. 2-6 below the split + Eq. 12 (3 harmonics) above it, "
                         "per-flight trim and Fourier coefficients, equation error",
@@ -467,9 +480,11 @@ def diagnose(
                             "candidates in play",
             "alpha": alpha,
             "min_gain_pct": 100 * min_gain,
-            "secondary_share": SECONDARY_SHARE,
-            "tie_share": TIE_SHARE,
             "block_s": BLOCK_S,
+            "confidence_level": LEVEL,
+            "confidence_set": f"model confidence set (Hansen, Lunde & Nason 2011, T_max, "
+                              f"block bootstrap over the scoring blocks) at level {LEVEL:g} "
+                              f"over none, each candidate and probe, pairs and the selection",
             "blocks": len(trb_idx) + len(teb_idx),
             "loads": list(loads),
         },

@@ -15,9 +15,6 @@ one.
 
 `drivers` says which measured signals a selected probe leans on.
 
-(The leading deflection and the flapping frequency were probes until issue 16 made them the
-catalogue's `time-offset` and `flap-frequency`.)
-
 No probe may contain the states' rates, or filtered states (a lagged state is the state minus
 its rate times the lag): the loads are reconstructed from those rates (Section III), so such a
 probe would "explain" any residual, measurement noise included.

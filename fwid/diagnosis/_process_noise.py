@@ -1,4 +1,4 @@
-"""Process noise as the evidence for a `random-disturbance` verdict (issue 17, item 3).
+"""Process noise as the evidence for a `random-disturbance` verdict.
 
 The colour of the held-out load residual (`_disturbance.py`) says that nothing measured
 predicts what is left; the filter-error method (Jategaonkar 2015, Ch. 5;

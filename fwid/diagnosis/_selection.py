@@ -13,19 +13,11 @@ rate of one state carries the load it is reconstructed from (`w' = Z / m + ...`)
 entry also "explains" any effect on the other loads of the axis. It gives way to any other
 passing catalogue entry that achieves `1 / RATES_MARGIN` of its held-out gain (a real effect
 on the loads seen through the other loads' rates is explained less well by the rates than
-directly; `RATES_MARGIN` and `RATES_MIN_GAIN` were chosen on the development half of
-`benchmarks/diagnosis_power.py`), otherwise it competes with the rest on its gain; and it may enter only as the first effect (once another effect is in, it would
-pick up that effect's leftover misfit on the other loads and name a second effect that is
-not there). Letting it follow another effect when the attitude probe passes beside it (a real
-lag of the loads behind `u`, `w`, `v` carries the gravity term of their rates) was tried on
-2026-11-24: on the development half both effects of 29 instead of 24 of 42 pairs, for 8
-instead of 6 spurious further effects; on the held-out half 29 instead of 23 pairs, but 16
-spurious `unsteady-aero` names (11 of them not `tentative`) after effects whose held-out forms
-leave more misfit. Not adopted. Nor was letting it follow effects of the flapping band only
-(2026-11-24, fifth session: their misfit lies at the flapping harmonics, which the
-cycle-averaged rates should not carry): on the development half's 60 cases with
-`flap-coupling` it named `unsteady-aero` after 4 single `amplitude` forms at strength 2 and in
-neither of the 2 pairs it belongs to (the run was stopped after 49 cases).
+directly), otherwise it competes with the rest on its gain; and it may enter only as the
+first effect: once another effect is in, it picks up that effect's leftover misfit on the
+other loads and would name a second effect that is not there. The confidence set
+(`_confidence.py`) does not use these rules: it keeps a pair with the rates' entry when the
+held-out blocks cannot reject it, which is what the user is told.
 """
 
 from __future__ import annotations
@@ -38,36 +30,17 @@ from ._attribution import Engine, Model
 from ._catalogue import Effect
 from ._significance import Evidence, Half, evidence
 
-#: Family-wise false-alarm level per round: the 5 % the false alarms may cost (issue 12). It
-#: was 1 %, fixed before either half of `benchmarks/diagnosis_power.py` was run; replaying the
-#: development half's rounds (438 cases, current code) at 5 % names 285 instead of 279 of 336
-#: single effects and both effects of 25 instead of 24 of 42 pairs, with the same false
-#: alarms (2 of 60 clean and out-of-catalogue cases, both rivalries, not level-bound) and the
-#: same single spurious second effect. The test is conservative (a candidate that explains
-#: nothing only adds held-out error), so the level is an upper bound, not the rate.
+#: Family-wise false-alarm level per round: the 5 % the false alarms may cost. The test is
+#: conservative (a candidate that explains nothing only adds held-out error), so the level is
+#: an upper bound, not the rate (`benchmarks/results/diagnosis_power_*.md`: false alarms).
 ALPHA = 0.05
 #: Smallest typical relative drop of a block's held-out error that counts (2 %).
 MIN_GAIN = 0.02
 #: Most effects selected.
 MAX_EFFECTS = 3
-#: An effect named after the first is `tentative` when its held-out gain is below this share
-#: of the first effect's. Each catalogue entry is the generic first term of its family, so
-#: the first effect's form leaves a misfit that grows with it, and another entry can pick it
-#: up (a real, significant gain, but not a second effect). Chosen on the development half of
-#: `benchmarks/diagnosis_power.py` from the recorded rounds of its run with the trial above
-#: (`unsteady-aero` after the first effect): of the 53 effects named after the first there,
-#: 39 true and 14 spurious; at 0.25, 8 true ones are flagged and 4 spurious ones are not (the
-#: sum, 12, is the least, as at 0.1-0.2; the largest such share was taken, a spurious name
-#: costing more than a flag on a true one). On the held-out half: 11 of 12 spurious further
-#: effects flagged, and 7 of the 24 pairs named lose a flagged member.
-SECONDARY_SHARE = 0.25
 #: How many times the gain of another passing catalogue entry an entry built on states'
-#: rates must have to be preferred to it. Giving way to any passing entry when it takes its
-#: shortest lag (an outside lag + `u^2` pair was named `unsteady-aero` alone that way) was
-#: replayed on the recorded first rounds on 2026-11-24 (sixth session): on the development
-#: half 3 of 9 wrong verdicts at 0.01 s would turn right, none of the 2 right ones wrong; on the
-#: held-out records 4 right `incidence-lag` verdicts at strength 2 would turn wrong (gain ratios
-#: 1.3-4 on both sides). Not adopted.
+#: rates must have to be preferred to it (chosen on the development half of
+#: `benchmarks/diagnosis_power.py`).
 RATES_MARGIN = 1.2
 #: Smallest typical held-out gain of an entry built on states' rates (3 %): the rates of the
 #: other states carry a little of the load's own noise through the kinematic terms
@@ -84,45 +57,10 @@ def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
             if not (e.rates and rival is not None and RATES_MARGIN * rival >= ev[e.name].mean)]
 
 
-#: An effect's verdict is a near tie when another candidate passing in the round that admitted
-#: it has at least this share of its held-out gain: which of the two it is, the data barely
-#: say. Chosen on the development half of `benchmarks/diagnosis_power.py` (its recorded
-#: first rounds; single effects, clean and out-of-catalogue cases): verdicts with a rival at
-#: 0.95 or more of their gain were wrong 13 times in 39, the others 22 times in 313 (at 0.9:
-#: 15 in 63; at 1.0: 10 in 20; the run recorded before the flag existed). It changes no
-#: verdict: it says which to doubt. The rival may be an entry built on rates that gave way
-#: (`RATES_MARGIN`), with a ratio above 1.
-TIE_SHARE = 0.95
-
-
-def tentative(first_gain: float, gain: float) -> bool:
-    """Is an effect named after the first (held-out `gain` in the round that admitted it) only
-    as large as what the first effect's form may leave (`SECONDARY_SHARE` of `first_gain`)?"""
-    return gain < SECONDARY_SHARE * first_gain
-
-
-def runner_up(chosen: str, passing: dict) -> dict | None:
-    """Of the candidates that passed a round (`passing`: name -> evidence with a `gain`),
-    the one other than `chosen` with the largest gain, as `{"effect", "gain_ratio"}` (its
-    gain over the chosen one's; 1 when that is not positive); `None` when none did."""
-    others = {k: ev for k, ev in passing.items() if k != chosen}
-    if not others:
-        return None
-    best = max(others, key=lambda k: others[k].gain)
-    gain = passing[chosen].gain
-    return {"effect": best, "gain_ratio": others[best].gain / gain if gain > 0 else 1.0}
-
-
-def near_tie(runner_up: dict | None) -> bool:
-    """Is an effect's `runner_up` (`{"effect", "gain_ratio"}` or `None`) a near tie
-    (`TIE_SHARE`)?"""
-    return runner_up is not None and runner_up["gain_ratio"] >= TIE_SHARE
-
-
 @dataclasses.dataclass
 class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
-    `rivals`: for each, its `runner_up` in the round that admitted it; `models`: the chosen model on each half;
+    `models`: the chosen model on each half;
     `rounds`: per round, its per-candidate level, every candidate's evidence and the effect
     it added (`None` for the round that stopped).
     Derived from them: `first`, every candidate's evidence in the first round (each against
@@ -131,7 +69,6 @@ class Selection:
     round."""
 
     chosen: list[tuple[Effect, Evidence]]
-    rivals: list[dict | None]
     models: list[Model]
     rounds: list[tuple[float, dict[str, Evidence], str | None]]
 
@@ -158,7 +95,7 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
                    max_effects: int = MAX_EFFECTS) -> Selection:
     models: list[Model] = [() for _ in halves]
     remaining = list(catalogue)
-    chosen, rivals, rounds = [], [], []
+    chosen, rounds = [], []
     while remaining and len(chosen) < max_effects:
         if chosen:
             remaining = [e for e in remaining if not e.rates]
@@ -173,7 +110,6 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
         rounds.append((lv, ev, best.name))
         chosen.append((best, ev[best.name]))
-        rivals.append(runner_up(best.name, {e.name: ev[e.name] for e in ok}))
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
-    return Selection(chosen, rivals, models, rounds)
+    return Selection(chosen, models, rounds)

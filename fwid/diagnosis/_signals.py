@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
 
-from .._errors import InputError
+from .._errors import DiagnosisWarning, ExcitationError, InputError
 from ..data import Flight
 from ..decomposition import decompose, flapping_phase
 
@@ -124,3 +125,27 @@ def check_axis(flights: Sequence[Flight], axis: str, role: str) -> None:
         raise InputError(f"no {role} flights given")
     for fl in flights:
         fl.require(REQUIRED[axis])
+
+
+def check_excitation(sigs, axis: str) -> None:
+    """Raise `ExcitationError` when the training flights `sigs` hardly move the control of
+    `axis`; warn (`DiagnosisWarning`) when they look like manoeuvres of the other axis."""
+    d = AXIS_INPUT[axis]
+    moves = [np.ptp(s.slow[d]) for s in sigs]
+    if max(moves) < 1e-3:  # rad: a twentieth of a degree
+        raise ExcitationError(
+            f"too little excitation to diagnose the {axis} axis: '{d}' moves by at most "
+            f"{max(moves):.2g} rad in the training flights ({', '.join(s.name for s in sigs)}); "
+            "use flights with a manoeuvre (a 3211 or doublet on the control)"
+        )
+    o = AXIS_INPUT[other(axis)]
+    if all(o in s.slow for s in sigs):
+        theirs = np.median([np.std(s.slow[o]) for s in sigs])
+        ours = np.median([np.std(s.slow[d]) for s in sigs])
+        if theirs > 3.0 * ours:
+            warnings.warn(
+                f"the training flights look like {other(axis)} manoeuvres: '{o}' moves "
+                f"{theirs / max(ours, 1e-12):.0f} times more than '{d}' (median standard "
+                f"deviation), but the {axis} axis is diagnosed; pass axis='{other(axis)}' "
+                f"(CLI: --axis {other(axis)}) to diagnose the manoeuvre flown",
+                DiagnosisWarning, stacklevel=3)

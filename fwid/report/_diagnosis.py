@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..diagnosis import BAND_NAMES, Diagnosis
+from ..diagnosis._provenance import provenance_text
 from ..diagnosis._selection import RATES_MARGIN
 from ..diagnosis._signals import AXIS_LOADS
 
@@ -53,6 +54,24 @@ def _convergence_caution(sim: dict) -> str:
             "read the shrink as rough")
 
 
+def _explanation_text(names: list[str]) -> str:
+    return " + ".join(names) if names else "none"
+
+
+def confidence_set_line(d: Diagnosis) -> str | None:
+    """The confidence set in words: "X, or Y: these flights cannot tell them apart" when it
+    holds more than one explanation; `None` when it holds one (or none was built)."""
+    kept = d.confidence_set
+    if len(kept) < 2:
+        return None
+    names = ", or ".join(_explanation_text(x["explanation"]) for x in kept)
+    detail = "; ".join(f"{_explanation_text(x['explanation'])} {x['gain_pct']:.1f} %, "
+                       f"p = {x['p_value']:.2g}" for x in kept)
+    return (f"  {names}: these flights cannot tell them apart (the model confidence set of the "
+            f"explanations at {100 * d.settings.get('confidence_level', 0.1):g} %; held-out "
+            f"gain and p value: {detail})")
+
+
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
@@ -92,6 +111,12 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      "filter-error fit models it")
         if d.process_noise is not None:
             lines.append("  " + _process_noise_line(d.process_noise))
+        if (d.states or {}).get("reconstructed") != "all":
+            lines.append("  It may be process noise (a disturbance the vehicle felt) or coloured "
+                         "errors in user-supplied states (a filter's lag, a gyro bias walk, "
+                         "smoothed velocities): these flights cannot tell them apart. "
+                         "Reconstructing the states from the raw recordings (fwid reconstruct) "
+                         "removes that doubt")
     elif d.verdict == "unexplained":
         u = d.unexplained
         drv = ", ".join(f"{x['signal']} {x['share_pct']:.0f} %" for x in u["drivers"])
@@ -110,15 +135,12 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
-    lead = (d.unexplained if d.verdict == "unexplained" else
-            d.effects[0] if d.effects and d.effects[0]["effect"] == d.verdict else None)
-    if lead is not None and lead.get("near_tie"):
-        ru = lead["runner_up"]
-        lines.append(f"  NEAR TIE: {ru['effect']} passed too, with "
-                     f"{100 * ru['gain_ratio']:.0f} % of the verdict's held-out gain"
-                     + (" (an entry built on states' rates gives way to a direct explanation "
-                        "with nearly its gain)" if ru["gain_ratio"] > 1 else "")
-                     + ": the data barely tell the two apart; read the verdict as one of the two")
+    st = provenance_text(d.states)
+    if st:
+        lines.append(f"  states: {st}")
+    cs = confidence_set_line(d)
+    if cs:
+        lines.append(cs)
     px = (d.disturbance or {}).get("proxy")
     if px:
         why = (f"left the residual red ({px['redness_after']:.1f})"
@@ -130,13 +152,14 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
                      f"{what}, so it is not named; the selection was run again without it)")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
-        lines.append(f"  and also{' (tentative)' if e.get('tentative') else ''}: {e['effect']}"
+        without = [x for x in d.confidence_set if e["effect"] not in x["explanation"]]
+        lines.append(f"  and also: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")
                      + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
                      f"{'/'.join(e['affected'])}"
-                     + (f" (its held-out gain {100 * e['relative_gain']:.0f} % of the first's: "
-                        "possibly what the first effect's form leaves)"
-                        if e.get("tentative") else ""))
+                     + (f" (the confidence set also keeps "
+                        f"{_explanation_text(without[0]['explanation'])} without it: these "
+                        "flights cannot tell whether it is there)" if without else ""))
     for e in (d.unexplained or {}).get("then", []) if not d.effects else []:
         # chosen (the table says so) but after the probe: not named, and why
         lines.append(f"  then, after the {d.unexplained['probe']} probe: {e['effect']}"

@@ -148,12 +148,19 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
         assert main(["simulate", str(folder), "--flights", "8", "--seed", str(seed),
                      "--effect", "nonlinear-aero", "--strength", "1.5"]) == 0
     capsys.readouterr()
+    # the training flights come from fwid reconstruct (CONTRACTS section 5), the test ones not
+    (train / "reconstruction.json").write_text(json.dumps({"flights": [
+        {"flight": p.name, "source": "motive", "clock_offset_s": -2.0, "dropouts": [],
+         "warnings": []} for p in sorted(train.glob("*.csv"))]}))
     assert main(["diagnose", "--train", str(train), "--test", str(test), "--out", str(out),
                  "--quiet", "--no-simulation", "--no-process-noise"]) == 0
     text = capsys.readouterr().out
     assert "VERDICT: nonlinear-aero" in text
+    assert "states: 8 of 16 flights rebuilt from raw recordings by fwid reconstruct" in text
     rep = json.loads((out / "diagnosis.json").read_text())
     assert rep["verdict"] == "nonlinear-aero"
+    assert rep["states"]["reconstructed"] == "some" and len(rep["states"]["missing"]) == 8
+    assert rep["confidence_set"][0]["explanation"][0] == "nonlinear-aero"
     top = rep["candidates"][0]
     assert top["effect"] == "nonlinear-aero" and top["significant"] and top["shrink_pct"] > 0
     assert set(top["test_rms_before"]) == {"X", "Y", "Z", "L", "M", "N"}

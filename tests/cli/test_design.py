@@ -83,3 +83,10 @@ def test_the_close_pair_and_its_variants_are_read_back():
                            {"effect": "unsteady-aero", "variant": "0.05 s"},
                            {"effect": "actuator-dynamics", "variant": "delay 0.02 s"}]}
     assert close_pair(diag) == [("nonlinear-aero", None), ("unsteady-aero", 0.05)]
+    # with a confidence set: the first entries of its first two explanations that differ
+    diag["confidence_set"] = [{"explanation": ["actuator-dynamics", "attitude"]},
+                              {"explanation": ["actuator-dynamics", "nonlinear-aero"]},
+                              {"explanation": ["nonlinear-aero"]}]
+    diag["candidates"][0]["variant"] = "terms ww, u|u|"
+    assert close_pair(diag) == [("actuator-dynamics", ("delay", 0.02)),
+                                ("nonlinear-aero", (2, 1))]

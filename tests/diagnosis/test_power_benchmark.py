@@ -8,8 +8,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 import diagnosis_power as dp  # noqa: E402
-from _power_summary import (catalogue_pairs, firmly_right, near_tie, near_ties, summarise,  # noqa: E402
-                            tentative_named)
+from _power_summary import catalogue_pairs, set_score, set_table, summarise  # noqa: E402
 
 
 def test_halves_share_no_form_and_no_seed():
@@ -41,32 +40,43 @@ def test_slice_runs_blind_and_is_summarised(tmp_path):
     assert "| lon-lat-coupling | 4+4 | 1/1 | 1/1 |" in text
     assert "| none | 4+4 | 0 | 1 | 1 | none 1 |" in text
     assert (tmp_path / "slice.png").stat().st_size > 0
-    assert "| near tie |" in text and "| no near tie |" in text
-    assert recs[0]["effects_detail"][0]["near_tie"] in (True, False)
-    # the record's own flag is the first effect's; none where no row carries one
-    assert recs[0]["near_tie"] == recs[0]["effects_detail"][0]["near_tie"]
-    assert recs[1]["near_tie"] is None
+    # the confidence sets are recorded and scored
+    assert recs[0]["confidence_set"][0]["explanation"][0] == "lon-lat-coupling"
+    assert recs[1]["confidence_set"][0]["explanation"] == []
+    assert "## The confidence set of explanations" in text
     back = [json.loads(json.dumps(r)) for r in recs]  # the records are what the .jsonl holds
     assert [r["verdict"] for r in back] == ["lon-lat-coupling", "none"]
 
 
-def test_tentative_further_effects_are_counted_from_the_flag_or_the_rounds():
-    def rnd(added, **gains):
-        return {"added": added, "candidates": {k.replace("_", "-"): {"gain_pct": g}
-                                               for k, g in gains.items()}}
+def test_the_set_is_scored_for_coverage_decisiveness_alarms_and_pairs():
+    def rec(kind, effect, *kept, n=6, strength=1.0, verdict=None):
+        return {"kind": kind, "effect": effect, "n": n, "strength": strength,
+                "verdict": verdict or (kept[0][0] if kept[0] else "none"),
+                "effects": [e for e in kept[0] if e != "attitude"],
+                "confidence_set": [{"explanation": list(x), "p_value": 1.0} for x in kept]}
 
-    rec = {"kind": "pair", "effect": "flap-coupling+nonlinear-aero", "verdict": "flap-coupling",
-           "effects": ["flap-coupling", "nonlinear-aero"],
-           "rounds": [rnd("flap-coupling", flap_coupling=40.0, nonlinear_aero=5.0),
-                      rnd("nonlinear-aero", nonlinear_aero=5.0), rnd(None)]}
-    assert tentative_named(rec) == {"nonlinear-aero"}  # 5 < 0.25 x 40, from the rounds
-    assert not firmly_right(rec)
-    rec["rounds"][1]["candidates"]["nonlinear-aero"]["gain_pct"] = 20.0
-    assert tentative_named(rec) == set() and firmly_right(rec)
-    # a record with the flag: the flag wins
-    rec["effects_detail"] = [{"effect": "flap-coupling", "tentative": False},
-                             {"effect": "nonlinear-aero", "tentative": True}]
-    assert tentative_named(rec) == {"nonlinear-aero"}
+    alone = rec("single", "nonlinear-aero", ["nonlinear-aero", "attitude"])
+    assert set_score(alone) == {"covered": True, "holds": True, "decisive": True,
+                                "alarm": False, "best": "nonlinear-aero",
+                                "size": 1}  # a probe is no rival
+    two = rec("single", "nonlinear-aero", ["unsteady-aero"], ["nonlinear-aero"])
+    assert set_score(two)["covered"] and not set_score(two)["decisive"]
+    assert set_score(two)["best"] == "unsteady-aero"
+    missed = rec("single", "nonlinear-aero", ["nonlinear-aero", "time-offset"])
+    assert not set_score(missed)["covered"]  # the truth alone is not an explanation kept
+    assert set_score(missed)["holds"]
+    clean = rec("clean", "none", [], ["attitude"])
+    assert not set_score(clean)["alarm"] and set_score(clean)["best"] == "none"
+    alarm = rec("out", "turbulence", ["attitude"], ["unsteady-aero"], verdict="unexplained")
+    assert set_score(alarm)["alarm"] and set_score(alarm)["best"] == "unexplained"
+    pair = rec("pair", "flap-coupling+time-offset", ["time-offset"],
+               ["time-offset", "flap-coupling"])
+    assert set_score(pair)["covered"]
+    text = "\n".join(set_table([alone, two, missed, clean, alarm, pair]))
+    assert "| single, strength 1, 6+6 | 3 | 2/3 | 3/3 | 1/3 | 2/3 | 2/3 | 1.3 |" in text
+    assert "a kept explanation holds both effects in 1/1" in text
+    assert "a catalogue name in the set of 1/2 clean and out-of-catalogue cases" in text
+    assert set_score({"kind": "single", "effect": "x", "verdict": "x"}) is None
 
 
 def test_pairs_are_also_scored_against_issue_12s_catalogue():
@@ -88,29 +98,6 @@ def test_pairs_are_also_scored_against_issue_12s_catalogue():
     assert "all pairs so scored: 4/6." in text
 
 
-def test_near_ties_are_counted_from_the_flag_or_the_first_round():
-    def rnd(added, level=0.01, **cands):
-        return {"added": added, "level": level,
-                "candidates": {k.replace("_", "-"): {"p": p, "gain_pct": g}
-                               for k, (p, g) in cands.items()}}
-
-    rec = {"kind": "single", "effect": "unsteady-aero", "verdict": "unsteady-aero",
-           "effects": ["unsteady-aero"],
-           "rounds": [rnd("unsteady-aero", unsteady_aero=(1e-5, 10.0), attitude=(1e-5, 9.8),
-                          nonlinear_aero=(0.5, 12.0)), rnd(None)]}
-    assert near_tie(rec)  # 9.8 / 10; nonlinear-aero did not pass its level
-    rec["rounds"][0]["candidates"]["attitude"]["gain_pct"] = 5.0
-    assert not near_tie(rec)
-    rec["effects_detail"] = [{"effect": "unsteady-aero", "near_tie": True}]
-    assert near_tie(rec)  # the flag wins
-    # the record's own flag wins over both (None: no row carries one, as the user saw it)
-    assert near_tie(dict(rec, near_tie=None)) is None
-    assert near_tie(dict(rec, near_tie=False)) is False
-    wrong = dict(rec, verdict="nonlinear-aero", effects_detail=[{"near_tie": False}])
-    assert near_ties([rec, wrong])[2:] == ["| near tie | 1 | 0 | 0 % |",
-                                           "| no near tie | 0 | 1 | 100 % |"]
-
-
 def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named(monkeypatch):
     """A strong thrust change with the flapping frequency (development case): `unsteady-aero`
     enters first as a proxy of a disturbance (it leaves the residual red, or takes its
@@ -129,5 +116,11 @@ def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named(monkeypatch):
     assert "may only stand in, through the states' rates, for a disturbance or for what " \
         "flap-frequency explains directly" in text and "tracked the disturbance" not in text
     assert rec["disturbance"]["proxy"]["effect"] == "unsteady-aero", rec.get("disturbance")
-    assert rec["verdict"] == "flap-frequency" and rec["effects"] == ["flap-frequency"]
+    assert rec["verdict"] == "flap-frequency" and rec["effects"][0] == "flap-frequency"
+    # a further effect is one the set cannot do without, or the summary says it may not be there
+    kept = [x["explanation"] for x in rec["confidence_set"]]
+    for e in rec["effects"][1:]:
+        if any(e not in x for x in kept):
+            assert "without it: these flights cannot tell whether it is there" in text
     assert all("unsteady-aero" not in r["candidates"] for r in rec["rounds"])
+    assert all("unsteady-aero" not in x["explanation"] for x in rec["confidence_set"])

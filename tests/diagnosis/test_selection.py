@@ -6,8 +6,7 @@ import types
 from fwid.diagnosis._catalogue import CATALOGUE, get_effect
 from fwid.diagnosis._probes import PROBES
 from fwid.diagnosis import _selection
-from fwid.diagnosis._selection import (RATES_MARGIN, SECONDARY_SHARE, TIE_SHARE, _admissible,
-                                      near_tie, tentative)
+from fwid.diagnosis._selection import RATES_MARGIN, _admissible
 
 
 def _ev(**means):
@@ -29,21 +28,9 @@ def test_rates_entry_gives_way_to_a_direct_entry_with_half_its_gain():
     assert _admissible([un, att], _ev(unsteady_aero=0.1, attitude=0.3)) == [un, att]
 
 
-
-def test_a_further_effect_smaller_than_the_first_leaves_is_tentative():
-    assert tentative(0.40, 0.9 * SECONDARY_SHARE * 0.40)
-    assert not tentative(0.40, 1.1 * SECONDARY_SHARE * 0.40)
-
-
-def test_a_rival_with_nearly_the_gain_of_the_chosen_effect_is_a_near_tie():
-    assert near_tie({"effect": "attitude", "gain_ratio": TIE_SHARE})
-    assert not near_tie({"effect": "attitude", "gain_ratio": 0.99 * TIE_SHARE})
-    assert not near_tie(None)
-
-
-def test_each_chosen_effect_keeps_the_best_other_candidate_that_passed(monkeypatch):
-    """Round 1: three pass, the largest gain is chosen, the next is its rival, the one that
-    failed the level is none; round 2: the only one that passes has no rival."""
+def test_each_round_adds_the_largest_gain_that_passes(monkeypatch):
+    """Round 1: three pass, the largest gain is chosen (not the one that failed the level);
+    round 2: the only one that passes; round 3: none passes and the selection stops."""
     import math
 
     table = {(): {"flap-coupling": (1e-6, 0.30), "nonlinear-aero": (1e-5, 0.29),
@@ -62,5 +49,4 @@ def test_each_chosen_effect_keeps_the_best_other_candidate_that_passed(monkeypat
              get_effect("lon-lat-coupling"), PROBES[0]]
     sel = _selection.forward_select(None, [None], cands)
     assert [e.name for e, _ in sel.chosen] == ["flap-coupling", "nonlinear-aero"]
-    assert sel.rivals[0] == {"effect": "nonlinear-aero", "gain_ratio": 0.29 / 0.30}
-    assert sel.rivals[1] is None
+    assert [added for _, _, added in sel.rounds] == ["flap-coupling", "nonlinear-aero", None]

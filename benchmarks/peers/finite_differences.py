@@ -2,7 +2,7 @@
 Euler angles (scipy's `Rotation`) after a Butterworth low-pass, loads from the same full
 nonlinear rigid-body equations. The comparison row of `benchmarks/reconstruction.py`.
 
-    python benchmarks/_fd_baseline.py RAW_DIR OUT_DIR [--cutoff HZ] [--clock-offsets JSON]
+    python benchmarks/peers/finite_differences.py RAW_DIR OUT_DIR [--cutoff HZ] [--clock-offsets JSON]
 
 Reads every top-level raw take of RAW_DIR (the fwid raw CSV, or a Motive export with its
 `NAME.onboard.csv`), writes section-1 flights `OUT_DIR/NAME.csv` and `OUT_DIR/vehicle.json`.

@@ -1,0 +1,214 @@
+"""A confidence set of explanations: every model of the gap the held-out blocks cannot reject.
+
+The explanations are the baseline alone (`none`), each catalogue entry and probe alone, the
+pairs of the catalogue entries that gain most alone (`PAIR_POOL`; ordered by that gain, an
+entry built on states' rates first or not at all, as in `_selection.py`), and the effects the
+forward selection chose together. The best explanation gives the verdict (its first effect). Each is scored, as the selection's evidence is
+(`_significance.py`), by the cross-fit: on every scoring block of about a second, the model
+fitted on the other flights gives, per band, the held-out sum of squares pooled over the loads
+(each scaled by the baseline's training mean square `s_l`), and the block's loss is
+
+    L_j(m) = sum_band log( sum_l SSE_j,l,band(m) / s_l ),
+
+so that the loss difference of a single effect and the baseline is the selection's `d_j`
+exactly. A model that explains nothing only adds held-out error, so over-fitting costs a
+larger explanation instead of helping it.
+
+Each effect of an explanation is charged the smallest held-out gain that counts,
+`-log(1 - g)` per block, with `g` the selection's `MIN_GAIN` (2 %; `RATES_MIN_GAIN`, 3 %, for
+an entry built on states' rates): the set compares explanations by the loss they would have
+if each effect had to earn that gain (an interval null: "at least 2 % better", not "better").
+Without the charge the held-out loss is not a fair judge of the rates' entry: the rates of
+the other states carry a little of the load's own noise through the kinematic terms, so on
+clean flights `unsteady-aero` gains a fraction of a per cent held out, significantly over
+tens of blocks, and rides along with every real effect as a pair (measured on simulated
+6 + 6 flights, `tests/diagnosis/test_confidence.py`).
+
+The set is Hansen, Lunde & Nason's *model confidence set* (Econometrica 79, 2011, 453-497)
+with their `T_max` statistic: while the live models differ significantly (the largest
+standardised excess loss over the live models' mean is compared with its bootstrap
+distribution), the worst is eliminated; each model's MCS p value is the largest elimination
+p value up to its own. The set at level `LEVEL` keeps the models whose p value reaches it: with
+probability at least `1 - LEVEL` (asymptotically) it holds the best explanation. The bootstrap
+resamples whole scoring blocks (a block bootstrap of the samples with one-second blocks): the
+residual's colour stays inside a block, and given the fit, blocks are taken as independent, as
+the selection's t test does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Sequence
+
+import numpy as np
+
+from ._attribution import Engine, Model
+from ._catalogue import Effect
+from ._selection import MIN_GAIN, RATES_MIN_GAIN
+from ._significance import Evidence, Half, evidence
+
+#: Level of the set: an explanation is kept when its MCS p value is at least this.
+LEVEL = 0.10
+#: Bootstrap resamples of the blocks.
+RESAMPLES = 2000
+#: Pairs are formed from this many catalogue entries, those with the largest held-out gain
+#: alone (a positive one): a pair both of whose members explain nothing alone is not tried.
+PAIR_POOL = 4
+
+
+@dataclasses.dataclass
+class Explanation:
+    """One model of the gap: its effects (catalogue entries or probes, in order of their gain
+    alone), its per-block held-out loss (`loss`, over every half's scoring blocks) and, once
+    the set is built, its MCS p value."""
+
+    effects: tuple[Effect, ...]
+    loss: np.ndarray
+    p_value: float = 1.0
+
+    @property
+    def names(self) -> list[str]:
+        return [e.name for e in self.effects]
+
+    @property
+    def charge(self) -> float:
+        """Per block, the smallest gains its effects must earn (module docstring)."""
+        return float(sum(-np.log1p(-(RATES_MIN_GAIN if e.rates else MIN_GAIN))
+                         for e in self.effects))
+
+    @property
+    def mean_loss(self) -> float:
+        """The mean block loss with the charge."""
+        return float(np.mean(self.loss)) + self.charge
+
+
+def mcs_p_values(losses: np.ndarray, resamples: int = RESAMPLES, seed: int = 0) -> np.ndarray:
+    """The MCS p value of each model (Hansen, Lunde & Nason 2011, `T_max`).
+
+    **Arguments:** `losses`, shape `(blocks, models)`; `resamples` (bootstrap draws of the
+    blocks, with replacement); `seed` (of the draws: the set is reproducible).
+
+    **Returns:** the p values, shape `(models,)`; the last model standing has 1.
+    """
+    n, m = losses.shape
+    rng = np.random.default_rng(seed)
+    counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples) / n  # (B, n) weights
+    live = list(range(m))
+    out = np.ones(m)
+    worst_p = 0.0
+    while len(live) > 1:
+        excess = losses[:, live] - losses[:, live].mean(axis=1, keepdims=True)
+        mean = excess.mean(axis=0)
+        boot = counts @ excess - mean  # (B, k): centred bootstrap means
+        sd = np.sqrt(np.mean(boot ** 2, axis=0))
+        safe = np.where(sd > 0, sd, np.inf)
+        t = np.where(sd > 0, mean / safe, 0.0)
+        t_boot = np.max(boot / safe, axis=1)
+        worst_p = max(worst_p, float(np.mean(t_boot >= t.max())))
+        k = int(np.argmax(t))
+        out[live[k]] = worst_p
+        live.pop(k)
+    return out
+
+
+def _block_losses(engine: Engine, halves: Sequence[Half], models: Sequence[Model],
+                  cache: dict) -> np.ndarray:
+    """Per scoring block (over every half), the loss of the module docstring of `models`
+    (one per half)."""
+    out = []
+    for h, (half, model) in enumerate(zip(halves, models)):
+        total = np.zeros(len(half.score))
+        for band in ("averaged", "flapping"):
+            acting = tuple((e.name, v) for e, v in model if e.band == band)
+            key = (h, band, acting)
+            if key not in cache:
+                chans = engine.channels(band)
+                w = np.array([1.0 / half.sigma2[ch] for ch in chans])
+                err = engine.block_errors(half.fit, half.score,
+                                          tuple((e, v) for e, v in model if e.band == band),
+                                          band)
+                cache[key] = np.log(np.maximum(err @ w, 1e-300))
+            total += cache[key]
+        out.append(total)
+    return np.concatenate(out)
+
+
+def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Evidence],
+                 candidates: Sequence[Effect], chosen: Sequence[Effect] = (),
+                 pair_pool: int = PAIR_POOL) -> list[Explanation]:
+    """The explanations of the module docstring with their block losses.
+
+    **Arguments:** `engine`, `halves` (the cross-fit's), `first` (every candidate's evidence
+    against the baseline alone: its variants per half and its gain), `candidates` (catalogue
+    entries and probes), `chosen` (the forward selection's effects, in order), `pair_pool`.
+
+    **Returns:** the explanations, `none` first, then the single ones, the pairs and the
+    selection's model; one whose losses equal an earlier one's (a second effect that acts on
+    no load) is left out.
+    """
+    cache: dict = {}
+    base = Explanation((), _block_losses(engine, halves, [() for _ in halves], cache))
+    out = [base]
+    for e in candidates:
+        models = [((e, v),) for v in first[e.name].variants]
+        out.append(Explanation((e,), _block_losses(engine, halves, models, cache)))
+    gaining = sorted((e for e in candidates if not e.probe and first[e.name].mean > 0),
+                     key=lambda e: -first[e.name].mean)[:pair_pool]
+    # an entry built on states' rates only first (`_selection.py`: after another effect it
+    # picks up that effect's leftover misfit on the other loads)
+    groups = [tuple(p) for p in itertools.combinations(gaining, 2) if not p[1].rates]
+    if len(chosen) > 1 and tuple(chosen) not in groups:
+        groups.append(tuple(chosen))
+    for group in groups:
+        models = []
+        for half, v in zip(halves, first[group[0].name].variants):
+            model = ((group[0], v),)
+            for e in group[1:]:
+                model = model + ((e, engine.choose(half.fit, model, e, half.sigma2)),)
+            models.append(model)
+        out.append(Explanation(group, _block_losses(engine, halves, models, cache)))
+    kept: list[Explanation] = []
+    for x in out:
+        if not any(np.array_equal(x.loss, k.loss) for k in kept):
+            kept.append(x)
+    return kept
+
+
+def confidence_set(found: list[Explanation], level: float = LEVEL,
+                   resamples: int = RESAMPLES) -> list[Explanation]:
+    """The explanations whose MCS p value is at least `level`, best (least mean held-out
+    loss) first; every explanation's `p_value` is set."""
+    p = mcs_p_values(np.stack([x.loss + x.charge for x in found], axis=1), resamples)
+    for x, pv in zip(found, p):
+        x.p_value = float(pv)
+    return sorted((x for x in found if x.p_value >= level), key=lambda x: x.mean_loss)
+
+
+def as_rows(kept: Sequence[Explanation], base: Explanation) -> list[dict]:
+    """`diagnosis.json`'s `confidence_set`: per explanation its effects (`[]`: none), its
+    mean held-out block loss relative to the baseline's `base` (`loss`: the mean over blocks
+    of `L_j(m) - L_j(none)`, negative when it explains part of the gap; `gain_pct`, the
+    typical held-out error drop `100 (1 - exp(loss))`), the `charge` its effects had to
+    earn (the set compares `loss + charge`) and its MCS p value."""
+    out = []
+    for x in kept:
+        loss = float(np.mean(x.loss - base.loss))
+        out.append({"explanation": x.names, "loss": loss,
+                    "gain_pct": 100.0 * (1.0 - float(np.exp(loss))), "charge": x.charge,
+                    "p_value": x.p_value})
+    return out
+
+
+def sequential(engine: Engine, halves: Sequence[Half], first: dict[str, Evidence],
+               effects: Sequence[Effect]) -> list[tuple[Effect, Evidence]]:
+    """The evidence of an explanation's `effects` as forward selection would have admitted
+    them in that order: the first's against the baseline (`first`), each further one's
+    added to those before it (`_significance.evidence`), for the rows of `diagnosis.json`."""
+    out: list[tuple[Effect, Evidence]] = []
+    models = [() for _ in halves]
+    for e in effects:
+        ev = first[e.name] if not out else evidence(engine, list(halves), models, e)
+        out.append((e, ev))
+        models = [m + ((e, v),) for m, v in zip(models, ev.variants)]
+    return out

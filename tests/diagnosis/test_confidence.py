@@ -1,0 +1,109 @@
+"""The confidence set of explanations: the MCS p values, and the set a diagnosis reports."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import fwid
+from fwid.diagnosis._confidence import LEVEL, mcs_p_values
+from fwid.report import diagnosis_summary
+
+
+def test_a_clearly_worse_model_is_eliminated_and_the_best_keeps_p_one():
+    rng = np.random.default_rng(0)
+    base = rng.normal(size=(60, 1))
+    losses = np.hstack([base, base + 1.0 + 0.1 * rng.normal(size=(60, 1)),
+                        base + 2.0 + 0.1 * rng.normal(size=(60, 1))])
+    p = mcs_p_values(losses, resamples=500)
+    assert p[0] == 1.0 and p[1] < 0.01 and p[2] < 0.01
+    assert p[2] <= p[1]  # the worst goes first; p values never fall along the eliminations
+
+
+def test_two_models_p_value_is_the_two_sided_test_of_their_mean_difference():
+    """With two models T_max is |mean difference| over its bootstrap standard error: the
+    worse one's p value is close to the two-sided normal test's."""
+    rng = np.random.default_rng(1)
+    n = 400
+    a = rng.normal(size=n)
+    b = a + 0.12 + rng.normal(size=n)
+    p = mcs_p_values(np.stack([a, b], axis=1), resamples=4000)
+    diff = b - a
+    z = diff.mean() / (diff.std(ddof=1) / math.sqrt(n))
+    assert p[0] == 1.0
+    assert p[1] == pytest.approx(2 * stats.norm.sf(abs(z)), abs=0.03)
+
+
+def test_equally_good_models_stay_together():
+    rng = np.random.default_rng(2)
+    common = rng.normal(size=(80, 1))
+    losses = common + 0.3 * rng.normal(size=(80, 3))
+    losses[:, 2] += 5.0
+    p = mcs_p_values(losses, resamples=1000)
+    assert p[0] >= LEVEL and p[1] >= LEVEL and p[2] < 0.01
+
+
+def test_the_set_of_a_diagnosis(effect_flights):
+    """A strong effect: the set holds it, never `none`; the single effect's held-out gain is
+    the selection's own first-round gain (two computations of one number); the summary line
+    appears only for a set of two or more."""
+    train, test = (fwid.load_flights(p) for p in effect_flights("actuator-dynamics", seed=5))
+    d = fwid.diagnose(train, test, simulation=False)
+    rows = d.to_json()["confidence_set"]
+    assert rows and all(r["explanation"] for r in rows)  # `none` is rejected
+    assert rows[0]["explanation"][0] == d.verdict == "actuator-dynamics"
+    assert all(r["p_value"] >= LEVEL for r in rows)
+    single = [r for r in rows if r["explanation"] == ["actuator-dynamics"]]
+    if single:
+        assert single[0]["gain_pct"] == pytest.approx(
+            d.first_round["actuator-dynamics"]["gain_pct"], rel=1e-9)
+    charged = [r["loss"] + r["charge"] for r in rows]
+    assert charged == sorted(charged)
+    text = diagnosis_summary(d)
+    assert ("cannot tell them apart" in text) == (len(rows) > 1)
+    d.confidence_set = [dict(rows[0], explanation=["actuator-dynamics"]),
+                        dict(rows[0], explanation=["time-offset", "attitude"], p_value=0.3)]
+    assert ("actuator-dynamics, or time-offset + attitude: these flights cannot tell them "
+            "apart") in diagnosis_summary(d)
+
+
+def test_clean_flights_leave_none_alone(effect_flights):
+    train, test = (fwid.load_flights(p) for p in effect_flights("none", seed=0))
+    d = fwid.diagnose(train, test, simulation=False)
+    assert d.verdict == "none"
+    assert [r["explanation"] for r in d.confidence_set][0] == []
+
+
+def _with_square(src, dst, load, state, frac):
+    """Copy a folder of flights, adding to `load` a single quadratic term in `state` of
+    `frac` times the load's spread."""
+    dst.mkdir(parents=True, exist_ok=True)
+    (dst / "vehicle.json").write_text((src / "vehicle.json").read_text())
+    for csv in sorted(src.glob("*.csv")):
+        header = csv.read_text().splitlines()[0]
+        names = header.split(",")
+        data = np.loadtxt(csv, delimiter=",", skiprows=1)
+        x = data[:, names.index(state)] - data[0, names.index(state)]
+        y = data[:, names.index(load)]
+        data[:, names.index(load)] += frac * np.std(y) * x * x / np.std(x * x)
+        np.savetxt(dst / csv.name, data, delimiter=",", header=header, comments="", fmt="%.12g")
+    return dst
+
+
+def test_nonlinear_aero_keeps_the_single_quadratic_term(effect_flights, tmp_path):
+    """A load with one quadratic term (`M += c w^2`): the family's size, chosen by
+    leave-one-flight-out error, is that term, not the whole group of nine; the EOM of the
+    simulation block gets that term only."""
+    from fwid.diagnosis._augment import augment
+
+    train, test = effect_flights("none", seed=2, n_train=4, n_test=4)
+    d = fwid.diagnose(fwid.load_flights(_with_square(train, tmp_path / "tr", "M", "w", 0.03)),
+                      fwid.load_flights(_with_square(test, tmp_path / "te", "M", "w", 0.03)),
+                      simulation=False)
+    assert d.verdict == "nonlinear-aero"
+    variant = d.effects[0]["variant"]
+    assert variant is not None and "ww" in variant.split("terms ")[1].split(", "), variant
+    model, _, _ = augment("lon", [("nonlinear-aero", (2,))])
+    assert {p for p in model.free if p.endswith("_ww")} == {"X_ww", "Z_ww", "M_ww"}
+    assert not any(p.endswith("_uu") or p.endswith("_wq") for p in model.free)
