@@ -9,7 +9,7 @@ autopilot logs to the section-1 flights every other stage reads.
 - Smoothing (JAX): a linear Kalman filter and Rauch-Tung-Striebel smoother with
   `lax.scan` (`_kalman.py`) on a kinematic model per axis, white jerk plus the flapping
   harmonics 1-3 with wandering coefficients and a gyro bias (`_model.py`), noise levels by
-  maximum likelihood, vmapped over takes of one length (`_smoother.py`); the attitude as an
+  maximum likelihood, vmapped over takes padded to one length (`_smoother.py`); the attitude as an
   iterated error-state smoother on SO(3) (`_attitude.py`).
 - The autopilot's clock against the tracking clock, and its signals resampled onto the
   take's time base without aliasing (`_clock.py`).

@@ -1,6 +1,7 @@
 """From raw takes to section-1 flights: read, align the clocks, smooth, rebuild the loads.
 
-Takes of one length are smoothed together (vmapped); a take that fails is reported and
+Takes of one sample step are smoothed together (vmapped), padded to one length (a multiple
+of `BUCKET` samples, unmeasured after each take's end); a take that fails is reported and
 left out while the others go on.
 """
 
