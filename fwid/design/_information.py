@@ -79,9 +79,11 @@ def sensitivities(setting: Setting, exp: Experiment
     return ys, S
 
 
+@eqx.filter_jit
 def information(setting: Setting, exp: Experiment
                 ) -> tuple[Float[Array, "p p"], Float[Array, "n ny"]]:
-    """The information matrix `M` (relative parameters) of one flight and its outputs."""
+    """The information matrix `M` (relative parameters) of one flight and its outputs
+    (compiled once per model and length)."""
     ys, S = sensitivities(setting, exp)
     J = jnp.einsum("ab,nbp->nap", setting.whiten, S * exp.mask[:, None, None])
     return fisher_information(J.reshape(-1, J.shape[-1])), ys

@@ -23,12 +23,16 @@ def _say(progress, msg: str) -> None:
 def minimise(loss: Callable[[Float[Array, " k"]], Float[Array, ""]],
              starts: Float[Array, "r k"], *, iterations: int = 300,
              learning_rate: float = 0.05, chunk: int = 50, progress=False,
-             label: str = "design") -> tuple[np.ndarray, np.ndarray, list[float]]:
+             label: str = "design", args=None
+             ) -> tuple[np.ndarray, np.ndarray, list[float]]:
     """Minimise `loss` from each row of `starts` with Adam and a cosine-decaying step.
 
     **Arguments:**
     - `loss`: a scalar function of the unconstrained design variables, differentiable by
-      `jax.grad` (reverse mode through the simulation).
+      `jax.grad` (reverse mode through the simulation); `loss(x, args)` where `args` is
+      given (arrays the loss reads: passed to the compiled steps as arguments, not baked
+      into them as constants, so that the compiled program is the same for every model of
+      the same shapes and the persistent compilation cache serves it).
     - `starts`: the random restarts, one per row.
     - `iterations`: Adam steps per restart; `chunk`: steps per compiled scan (a progress
       line after each).
@@ -39,11 +43,16 @@ def minimise(loss: Callable[[Float[Array, " k"]], Float[Array, ""]],
     """
     schedule = optax.cosine_decay_schedule(learning_rate, iterations, alpha=0.05)
     opt = optax.adam(schedule)
-    value_and_grad = jax.value_and_grad(loss)
+    if args is None:
+        def loss_of(x, _):
+            return loss(x)
+    else:
+        loss_of = loss
+    value_and_grad = jax.value_and_grad(loss_of)
 
-    def one(carry, _):
+    def one(carry, args):
         x, state, best_x, best_f = carry
-        f, g = value_and_grad(x)
+        f, g = value_and_grad(x, args)
         g = jnp.where(jnp.isfinite(g), g, 0.0)
         better = jnp.isfinite(f) & (f < best_f)
         best_x = jnp.where(better, x, best_x)
@@ -52,8 +61,11 @@ def minimise(loss: Callable[[Float[Array, " k"]], Float[Array, ""]],
         return (optax.apply_updates(x, upd), state, best_x, best_f), None
 
     @eqx.filter_jit
-    def run(carry):
-        return jax.vmap(lambda c: jax.lax.scan(one, c, None, length=chunk)[0])(carry)
+    def run(carry, args):
+        def steps(c):
+            return jax.lax.scan(lambda c_, _: (one(c_, args)[0], None), c, None,
+                                length=chunk)[0]
+        return jax.vmap(steps)(carry)
 
     starts = jnp.asarray(starts, dtype=float)
     states = jax.vmap(opt.init)(starts)
@@ -61,7 +73,7 @@ def minimise(loss: Callable[[Float[Array, " k"]], Float[Array, ""]],
     # the same types in as out, so that the compiled chunk is reused (no weak types)
     carry = jax.tree.map(lambda a: jnp.asarray(a, dtype=a.dtype), carry)
     history, t0 = [], time.perf_counter()
-    carry = run(carry)
+    carry = run(carry, args)
     carry = jax.tree.map(lambda a: jnp.asarray(a, dtype=a.dtype), carry)
     done = chunk
     while True:
@@ -72,10 +84,10 @@ def minimise(loss: Callable[[Float[Array, " k"]], Float[Array, ""]],
                        f"({time.perf_counter() - t0:.1f} s)")
         if done >= iterations:
             break
-        carry = run(carry)
+        carry = run(carry, args)
         done += chunk
     # the last iterate too
-    f_last = jax.vmap(loss)(carry[0])
+    f_last = eqx.filter_jit(jax.vmap(loss_of, in_axes=(0, None)))(carry[0], args)
     better = jnp.isfinite(f_last) & (f_last < carry[3])
     best_x = jnp.where(better[:, None], carry[0], carry[2])
     best_f = jnp.where(better, f_last, carry[3])
