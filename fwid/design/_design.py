@@ -16,12 +16,11 @@ from ..models._greybox import GreyBoxModel
 from ..simulation._averaged import averaged
 from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
-from jaxtyping import Array, Float
-
 from ._affine import affine_responses
+from ._criterion import AffineLoss, objective, parametrisation as _parametrisation
 from ._information import (Setting, absolute, information, log_det, prior_matrix,
                            vehicle_information)
-from ._optimise import _say, minimise
+from ._optimise import _say, flip_search, minimise
 from ._signals import Grid, harmonics, input_3211, step_index
 from ._source import ATTITUDE, CONTROL, from_identification, from_report, report_prior
 
@@ -124,64 +123,13 @@ def check_limits(duration, amplitude, quiet, rate, switch_rate=None) -> None:
         raise InputError(f"design: switch rate must be > 0 Hz, got {switch_rate}")
 
 
-def log_variances(M: Float[Array, "g g"]) -> Float[Array, ""]:
-    """`-sum_i log (M^-1)_ii`: minus twice the log of the geometric mean of the predicted
-    standard deviations, times the parameter count (scale-invariant, like `log det`)."""
-    L = jnp.linalg.cholesky(0.5 * (M + M.T))
-    Linv = jax.scipy.linalg.solve_triangular(L, jnp.eye(M.shape[0]), lower=True)
-    return -jnp.sum(jnp.log(jnp.sum(Linv**2, axis=0)))
-
-
-#: The design criteria, to be maximised, of the vehicle's information (relative units).
-CRITERIA = {"d-optimal": log_det, "variances": log_variances}
-
-
-def _objective(name: str):
-    if name not in CRITERIA:
-        raise InputError(f"design: criterion must be one of {', '.join(CRITERIA)}, got "
-                         f"{name!r}")
-    return CRITERIA[name]
-
-
 def criterion(setting: Setting, t, u, base=None, kind: str = "d-optimal"):
     """The design criterion of the control `u` at the times `t` (`kind`: `"d-optimal"`,
     `log det`, or `"variances"`, `-sum log diag M^-1`) of the vehicle's information
     (relative units) plus `base` (flights flown, prior), and the outputs."""
     M, ys = information(setting, setting.experiment(t, u))
     Mv = vehicle_information(setting, M)
-    return _objective(kind)(Mv if base is None else Mv + base), ys
-
-
-def _parametrisation(name, grid, amplitude, switch_rate, band):
-    """The basis signals `(k, n)`, the map from the free variables to their coefficients
-    (the input is `coef(x) @ basis`), and a random start of the free variables."""
-    if name == "multisine":
-        freqs = harmonics(grid, (max(band[0], 1e-9), band[1]))
-        if freqs.size == 0:
-            raise InputError(f"design: no harmonic of 1/{grid.length:g} Hz in the band {band}")
-        tau = 2 * np.pi * freqs[:, None] * (grid.t - grid.quiet)[None]
-        basis = np.concatenate([np.sin(tau), np.cos(tau)]) * grid.active
-        m = freqs.size
-        E = jnp.asarray(basis)
-
-        def coef(x):  # sum a_k sin(w_k tau + phi_k), its peak scaled to the amplitude
-            c = jnp.concatenate([x[:m] * jnp.cos(x[m:]), x[:m] * jnp.sin(x[m:])])
-            return amplitude * c / jnp.max(jnp.abs(c @ E))
-
-        def start(key):
-            a, p = jax.random.split(key)
-            return jnp.concatenate([jax.random.uniform(a, (m,), minval=0.2),
-                                    jax.random.uniform(p, (m,), maxval=2 * jnp.pi)])
-        return basis, coef, start
-    idx, k = step_index(grid, switch_rate)
-    basis = (idx[None, :] == np.arange(k)[:, None]).astype(float)
-
-    def coef(x):  # A tanh(x_j) held for 1 / switch_rate s
-        return amplitude * jnp.tanh(x)
-
-    def start(key):
-        return 1.5 * jax.random.normal(key, (k,))
-    return basis, coef, start
+    return objective(kind)(Mv if base is None else Mv + base), ys
 
 
 def flown_information(setting: Setting, flown: Sequence, grid_rate: float) -> np.ndarray:
@@ -227,10 +175,10 @@ def design_input(
     R=None,
     control: str | None = None,
     attitude: str | None = None,
-    restarts: int = 4,
+    restarts: int = 16,
     iterations: int = 300,
     seed: int = 0,
-    criterion: str = "d-optimal",
+    criterion: str = "variances",
     fast: bool | None = None,
     progress=False,
 ) -> Design:
@@ -312,22 +260,16 @@ def design_input(
         raise InputError(f"design: fast=True but the model is not affine in the input (a "
                          f"direct solve differs from the affine prediction by {worst:.2g}, "
                          "relative); leave fast to None")
-    objective = _objective(criterion)
+    crit = objective(criterion)
 
     def total(M):
-        return objective(vehicle_information(setting, M) + base)
+        return crit(vehicle_information(setting, M) + base)
 
     if affine is not None:  # the information is a quadratic form in the coefficients
-        def loss(x, data):  # the arrays as arguments: one compiled program for any model
-            v = coef(x)
-            if bound is not None:
-                peak = jnp.max(jnp.abs(data["affine"].outputs(v)[:, att]))
-                v = v * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, data["bound"] / peak),
-                                  0.0)
-            Mv = vehicle_information(setting, data["affine"].information(v))
-            return -objective(Mv + data["base"])
-        data = dict(affine=affine, base=jnp.asarray(base),
-                    bound=jnp.asarray(1.0 if bound is None else bound))
+        loss = AffineLoss(affine, coef, jnp.asarray(base),
+                          jnp.asarray(1.0 if bound is None else bound),
+                          None if bound is None else att, setting.glob, setting.loc,
+                          criterion)
     else:
         def bounded(u):
             """`u` scaled down so that the predicted attitude peak is within the bound (exact
@@ -338,8 +280,6 @@ def design_input(
             _, ys = simulate(mdl, setting.experiment(grid.t, u))
             peak = jnp.max(jnp.abs(ys[:, att]))
             return u * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, bound / peak), 0.0)
-
-        data = None
 
         def loss(x):
             M, ys = information(setting, setting.experiment(grid.t, bounded(signal(x))))
@@ -355,12 +295,20 @@ def design_input(
                       if affine is not None else "through the simulation at every step"))
     xs, fs, history = minimise(loss, starts, iterations=iterations,
                                learning_rate=0.05 if parametrisation == "multisine" else 0.1,
-                               progress=progress, args=data)
-    best = xs[int(np.argmin(fs))]
+                               progress=progress)
+    best, polished = xs[int(np.argmin(fs))], None
+    if affine is not None and parametrisation == "steps":  # the optimum is near bang-bang
+        f_best = float(np.min(fs))
+        for x in xs:  # every restart's, the search being local
+            xb, fb, flips = flip_search(loss, x)
+            if fb < f_best:
+                best, f_best, polished = xb, fb, flips
+        _say(progress, f"design: bang-bang polish of every restart (sign flips), best "
+                       f"criterion {-f_best:.4g}")
     u = np.asarray(signal(jnp.asarray(best)))
     u = _within_attitude(setting, grid, u, att, bound)
     return _result(setting, grid, u, base, att, bound, amplitude, attitude_limit, margin,
-                   hold_other, objective, dict(model=mdl.name, criterion=criterion,
+                   hold_other, crit, dict(model=mdl.name, criterion=criterion,
                                     affine_in_input=affine is not None,
                                     affine_check_rel=worst, parametrisation=parametrisation,
                                     switch_rate=switch_rate if parametrisation == "steps"
@@ -369,6 +317,7 @@ def design_input(
                                     iterations=iterations, seed=seed, rate_hz=rate,
                                     noise=noise, flown=len(flown or ()),
                                     prior=prior_information is not None,
+                                    sign_flips=polished,
                                     history=[-h for h in history]))
 
 

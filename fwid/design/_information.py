@@ -92,7 +92,12 @@ def information(setting: Setting, exp: Experiment
 def vehicle_information(setting: Setting, M: Float[Array, "p p"]) -> Float[Array, "g g"]:
     """The Schur complement of the per-flight parameters: what a flight tells about the
     vehicle's parameters."""
-    g, l_ = np.asarray(setting.glob), np.asarray(setting.loc)
+    return schur(M, setting.glob, setting.loc)
+
+
+def schur(M: Float[Array, "p p"], glob, loc) -> Float[Array, "g g"]:
+    """`M_gg - M_gl M_ll^-1 M_lg` of the indices `glob` (kept) and `loc` (eliminated)."""
+    g, l_ = np.asarray(glob), np.asarray(loc)
     Mgg = M[np.ix_(g, g)]
     if l_.size == 0:
         return Mgg
