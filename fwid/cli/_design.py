@@ -32,6 +32,7 @@ def design(args) -> int:
                           amplitude=args.amplitude, quiet=args.quiet,
                           parametrisation=args.parametrisation, switch_rate=args.switch_rate,
                           rate=args.rate, restarts=args.restarts, seed=args.seed,
+                          criterion=args.criterion,
                           attitude_limit="3211" if args.attitude_limit is None
                           else args.attitude_limit,
                           progress=(lambda m: print(f"fwid: {m}", file=sys.stderr))

@@ -178,7 +178,10 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--attitude-limit", type=float, default=None,
                    help="bound on the predicted attitude excursion [rad] (80%% of it used); "
                         "default: the excursion of a 3211 of the same amplitude and length")
-    g.add_argument("--restarts", type=int, default=4, help="random restarts")
+    g.add_argument("--criterion", choices=("variances", "d-optimal"), default="variances",
+                   help="minimise the geometric mean of the parameters' predicted variances "
+                        "(default) or maximise log det of their information (D-optimal)")
+    g.add_argument("--restarts", type=int, default=16, help="random restarts")
     g.add_argument("--seed", type=int, default=0, help="random seed of the restarts")
     g.add_argument("--no-progress", dest="quiet_progress", action="store_true",
                    help="no progress lines")

@@ -8,8 +8,12 @@
   the prior;
 - `_source.py`: the model, constants and noise covariance from a `report.json` or an
   identification;
-- `_optimise.py`: Adam (optax) over random restarts side by side;
-- `_design.py`: [`fwid.design_input`][], the D-optimal input, and its `Design`;
+- `_affine.py`: the responses of a model affine in the input, precomputed (the information a
+  quadratic form in the input's coefficients), and the numerical check that it is;
+- `_criterion.py`: the criteria (geometric mean of the variances, D-optimal), the
+  parametrisations as basis coefficients, the affine criterion as one pytree;
+- `_optimise.py`: Adam (optax) over random restarts side by side, and the sign-flip polish;
+- `_design.py`: [`fwid.design_input`][], the designed input, and its `Design`;
 - `_discriminate.py`: [`fwid.design_discriminating`][], the input that best tells two models
   apart.
 """

@@ -79,9 +79,11 @@ def sensitivities(setting: Setting, exp: Experiment
     return ys, S
 
 
+@eqx.filter_jit
 def information(setting: Setting, exp: Experiment
                 ) -> tuple[Float[Array, "p p"], Float[Array, "n ny"]]:
-    """The information matrix `M` (relative parameters) of one flight and its outputs."""
+    """The information matrix `M` (relative parameters) of one flight and its outputs
+    (compiled once per model and length)."""
     ys, S = sensitivities(setting, exp)
     J = jnp.einsum("ab,nbp->nap", setting.whiten, S * exp.mask[:, None, None])
     return fisher_information(J.reshape(-1, J.shape[-1])), ys
@@ -90,7 +92,12 @@ def information(setting: Setting, exp: Experiment
 def vehicle_information(setting: Setting, M: Float[Array, "p p"]) -> Float[Array, "g g"]:
     """The Schur complement of the per-flight parameters: what a flight tells about the
     vehicle's parameters."""
-    g, l_ = np.asarray(setting.glob), np.asarray(setting.loc)
+    return schur(M, setting.glob, setting.loc)
+
+
+def schur(M: Float[Array, "p p"], glob, loc) -> Float[Array, "g g"]:
+    """`M_gg - M_gl M_ll^-1 M_lg` of the indices `glob` (kept) and `loc` (eliminated)."""
+    g, l_ = np.asarray(glob), np.asarray(loc)
     Mgg = M[np.ix_(g, g)]
     if l_.size == 0:
         return Mgg

@@ -1,5 +1,6 @@
 """The D-optimal design: its gradient, its limits, a known analytic optimum."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -17,24 +18,96 @@ def design(report_path):
                              rate=50.0, restarts=2, iterations=100, switch_rate=8.0)
 
 
-def test_gradient_of_the_criterion_equals_finite_differences(report_path):
+@pytest.fixture(scope="module")
+def lon_setting(report_path):
     from fwid.design._source import from_report
 
     model, consts, R, _ = from_report(str(report_path))
-    setting = Setting(model.with_params(bq=0.0, bu=0.0, bw=0.0, btheta=0.0), consts, R, "de")
-    grid = Grid(2.0, 0.5, 50.0)
-    x = jnp.asarray(np.random.default_rng(1).normal(size=15))
+    return Setting(model.with_params(bq=0.0, bu=0.0, bw=0.0, btheta=0.0), consts, R, "de")
 
-    def f(x):
-        return criterion(setting, grid.t, steps(x, grid, 10.0, 0.1))[0]
 
-    g = jax.grad(f)(x)
-    h = 1e-5
-    for i in (0, 4, 9, 14):
+def _central_differences(f, x, idx, h=1e-5):
+    out = []
+    for i in idx:
         e = jnp.zeros_like(x).at[i].set(h)
-        fd = (f(x + e) - f(x - e)) / (2 * h)
-        assert float(g[i]) == pytest.approx(float(fd), rel=1e-5, abs=1e-8)
+        out.append((f(x + e) - f(x - e)) / (2 * h))
+    return np.array([float(v) for v in out])
+
+
+@pytest.mark.parametrize("kind", ["d-optimal", "variances"])
+def test_gradient_of_the_criterion_equals_finite_differences(lon_setting, kind):
+    """Through the precomputed responses of the longitudinal model (the default path)."""
+    from fwid.design._affine import affine_responses
+    from fwid.design._criterion import AffineLoss, parametrisation
+
+    grid = Grid(3.0, 0.5, 50.0)  # the `design` fixture's: its compiled solves are reused
+    basis, coef, _ = parametrisation("steps", grid, 0.1, 8.0, None)
+    affine, _ = affine_responses(lon_setting, grid.t, basis, 0.1)
+    loss = AffineLoss(affine, coef, jnp.zeros((12, 12)), jnp.asarray(0.02), 3,
+                      lon_setting.glob, lon_setting.loc, kind)
+    x = jnp.asarray(np.random.default_rng(1).normal(size=20))
+    g = jax.grad(loss)(x)
+    idx = (0, 4, 9, 19)
+    np.testing.assert_allclose(np.asarray(g)[list(idx)],
+                               _central_differences(eqx.filter_jit(loss), x, idx), rtol=1e-5,
+                               atol=1e-8)
     assert float(jnp.max(jnp.abs(g))) > 1e-3  # not trivially zero
+
+
+def test_gradient_through_the_simulation_equals_finite_differences():
+    """Through the RK4 solve and its sensitivities (the path of a model not affine in the
+    input): a first-order model with a quadratic term."""
+    def f(x, u, p, c):
+        return jnp.stack([p["a"] * x[0] + p["b"] * u[0] + p["c"] * x[0] ** 2])
+
+    model = fwid.GreyBoxModel(f, states=("x",), inputs=("u",),
+                              params={"a": -2.0, "b": 1.5, "c": 0.5})
+    setting = Setting(model, {}, [[1e-4]], "u")
+    grid = Grid(2.0, 0.5, 20.0)
+
+    def crit(x):
+        return criterion(setting, grid.t, steps(x, grid, 5.0, 0.3))[0]
+
+    x = jnp.asarray(np.random.default_rng(2).normal(size=8))
+    g = jax.grad(crit)(x)
+    idx = (0, 3, 7)
+    np.testing.assert_allclose(np.asarray(g)[list(idx)], _central_differences(crit, x, idx),
+                               rtol=1e-5, atol=1e-8)
+    assert float(jnp.max(jnp.abs(g))) > 1e-3
+
+
+def test_the_affine_information_equals_the_simulation_to_round_off(lon_setting):
+    """The longitudinal model is affine in the input: the precomputed quadratic form gives
+    the information and outputs of a direct solve of the sensitivities."""
+    from fwid.design._affine import affine_responses
+    from fwid.design._criterion import parametrisation
+    from fwid.design._information import information
+
+    grid = Grid(3.0, 0.5, 50.0)
+    for name in ("steps", "multisine"):
+        basis, _, _ = parametrisation(name, grid, 0.1, 8.0, (0.0, 3.0))
+        affine, worst = affine_responses(lon_setting, grid.t, basis, 0.1)
+        assert affine is not None and worst < 1e-10
+        v = 0.1 * np.random.default_rng(3).uniform(-1, 1, basis.shape[0])
+        M, ys = information(lon_setting, lon_setting.experiment(grid.t, v @ basis))
+        np.testing.assert_allclose(np.asarray(affine.information(jnp.asarray(v))),
+                                   np.asarray(M), rtol=1e-9, atol=1e-9 * float(M.max()))
+        np.testing.assert_allclose(np.asarray(affine.outputs(jnp.asarray(v))), np.asarray(ys),
+                                   rtol=1e-9, atol=1e-12)
+
+
+def test_a_model_not_affine_in_the_input_is_designed_through_the_simulation():
+    def f(x, u, p, c):
+        return jnp.stack([p["a"] * x[0] + p["b"] * u[0] + 0.3 * u[0] ** 3])
+
+    model = fwid.GreyBoxModel(f, states=("x",), inputs=("u",), params={"a": -2.0, "b": 1.5})
+    kw = dict(consts={}, R=[[1e-3]], duration=2.0, quiet=0.5, amplitude=0.5, rate=20.0,
+              switch_rate=5.0, attitude_limit=None, restarts=1, iterations=50)
+    d = fwid.design_input(model, **kw)
+    assert d.settings["affine_in_input"] is False
+    assert d.settings["affine_check_rel"] > 1e-4
+    with pytest.raises(fwid.InputError, match="not affine in the input"):
+        fwid.design_input(model, fast=True, **kw)
 
 
 def test_the_limits_hold(design):
@@ -114,7 +187,8 @@ def test_first_order_system_optimum_is_a_over_root_3():
     np.testing.assert_allclose(got - got[0], analytic - analytic[0], atol=0.05)
     d = fwid.design_input(model, consts={}, R=[[1e-4]], duration=61.0, quiet=1.0,
                           amplitude=1.0, rate=10.0, parametrisation="steps", switch_rate=2.0,
-                          attitude_limit=None, restarts=2, iterations=300)
+                          attitude_limit=None, restarts=2, iterations=300,
+                          criterion="d-optimal")
     assert d.criterion >= float(np.max(np.asarray(crit)))
     u = d.u[grid.active > 0]
     switches = np.sum(np.sign(u[1:]) != np.sign(u[:-1])) / 60.0  # per second
