@@ -46,28 +46,43 @@ def _fns():
     return _JIT
 
 
-def _active_window(z, u, mask, dt, lengths=None) -> np.ndarray:
+def _cycle_mean(y: np.ndarray, w: int) -> np.ndarray:
+    """`y` `(N, c)` averaged over `w` samples, twice (centred, edges held): the flapping
+    harmonics of a period of about `w` samples cancel, the slow motion stays."""
+    for _ in range(2):
+        pad = np.pad(y, ((w // 2, w - 1 - w // 2), (0, 0)), mode="edge")
+        c = np.cumsum(np.concatenate([np.zeros((1, y.shape[1])), pad]), 0)
+        y = (c[w:] - c[:-w]) / w
+    return y
+
+
+def _active_window(z, u, mask, dt, lengths=None, omega=None) -> np.ndarray:
     """Sample indices `(M, W)` of each problem's most active `ML_WINDOW` samples, where the
-    noise levels are chosen: the window with the largest energy of the second difference of
-    the measured path (`z` less the summed inputs `u`), averaged over ~0.1 s (a take that is
-    quiet but for its manoeuvre must be smoothed as its manoeuvre needs). `lengths` `(M,)`:
-    each problem's own samples (the rest pads it to the batch's length), all by default."""
+    noise levels are chosen: the window where the slow (cycle-averaged) motion accelerates
+    most. The measured path (`z` less the summed inputs `u`) is averaged over one flapping
+    cycle (twice, `omega` the flapping angular frequency `(M, N)`; 0.1 s without it), and
+    its second difference over one cycle squared: the manoeuvre, not the flapping (which is
+    as large in steady flight), decides; a take that is quiet but for its manoeuvre must be
+    smoothed as its manoeuvre needs, whatever its length. `lengths` `(M,)`: each problem's
+    own samples (the rest pads it to the batch's length), all by default."""
     M, N = mask.shape
     W = min(N, ML_WINDOW)
     lengths = np.full(M, N) if lengths is None else np.asarray(lengths, int)
     path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
-    k = max(1, int(round(0.1 / dt)))
     out = np.empty((M, W), int)
     for m in range(M):
         N = int(lengths[m])
+        w0 = np.nanmedian(omega[m, :N]) if omega is not None else np.nan
+        k = int(round(2 * np.pi / (w0 * dt))) if np.isfinite(w0) and w0 > 0 else int(round(0.1 / dt))
+        k = max(1, min(k, N // 8))
         y = path[m, :N]
         good = np.isfinite(y[:, 0])
         y = np.stack([np.interp(np.arange(N), np.flatnonzero(good), c[good]) for c in y.T], 1)
-        kernel = np.ones(k) / k
-        sm = np.stack([np.convolve(c, kernel, mode="same") for c in y.T], 1)
+        sm = _cycle_mean(y, k)
         a = np.zeros(N)
-        a[1:-1] = np.sum((sm[2:] - 2 * sm[1:-1] + sm[:-2]) ** 2, 1)
-        a[:k], a[-k:] = 0.0, 0.0  # the convolution's edges
+        if N > 2 * k:
+            a[k:-k] = np.sum((sm[2 * k:] - 2 * sm[k:-k] + sm[:-2 * k]) ** 2, 1)
+        a[:2 * k], a[N - 2 * k:] = 0.0, 0.0  # the averages' edges
         c = np.concatenate([[0.0], np.cumsum(a)])
         start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0  # past N: the padding
         out[m] = np.arange(start, start + W)
@@ -160,7 +175,7 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
                                            mdl.GYRO_RATIOS if bias else (1.0,)))] * M
         else:  # the motion's levels known (from the attitude alone): the gyro's noise only
             grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
-        idx = _active_window(z, U[:, :, 0, :], mask, dt, lengths)  # (M, W)
+        idx = _active_window(z, U[:, :, 0, :], mask, dt, lengths, omega)  # (M, W)
         take = lambda a: np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)  # noqa: E731
         Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
         Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
