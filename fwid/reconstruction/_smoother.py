@@ -18,7 +18,7 @@ import numpy as np
 
 from . import _model as mdl
 
-#: Samples used to choose the noise levels (from the middle of a take).
+#: Samples used to choose the noise levels (the window where the slow motion is most active).
 ML_WINDOW = 1000
 #: Largest memory (bytes) of the stored smoother gains of one vmapped call.
 GAIN_BYTES = 2e8
