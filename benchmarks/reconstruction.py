@@ -9,7 +9,8 @@ longitudinal 3211/doublet/211/pulse inputs), recorded around the default (Motive
 y-up mm, 200 Hz, 0.4 mm and 0.15 deg pose noise, 0.5 % dropouts, autopilot log at 512 Hz on a
 clock offset by a random -200..200 s), varying one factor at a time: pose noise 0.1-2 mm
 (attitude noise in proportion), tracking rate 100-500 Hz, dropout share 0-5 %, the clock
-offset; plus the fwid raw CSV (NED, one file, sign-flipping quaternions).
+offset; plus the fwid raw CSV (NED, one file, sign-flipping quaternions), and takes of 30 s
+and 60 s (a manoeuvre in the first seconds, then steady flight).
 
 **Errors** (`error`): over the overlap of take and log less 0.5 s at each end, against
 `truth/NAME.csv` on the same frames. Cycle-averaged (`ca`): both low-passed at 5 Hz
@@ -25,8 +26,9 @@ as a process (finite differences of positions and scipy Euler angles after a 40 
 Butterworth, the same load equations; it is handed the true clock offset).
 
 **Speed** (`speed`): 16 Motive takes of 60 s at 200 Hz; wall seconds of the whole process,
-`fwid reconstruct` cold (first run) and warm (a second run: JAX's compilation cache filled)
-and the baseline, each run once.
+`fwid reconstruct` cold (first run) and warm (a second run: JAX's compilation cache filled),
+warm again with `--no-figures`, and the baseline, each run once; with each its CPU seconds
+(user + system of the process) and the load average as it started.
 """
 
 from __future__ import annotations
@@ -64,7 +66,7 @@ def grid(quick: bool) -> list[dict]:
     cases += [(f"dropouts {100 * d:g} %", {"dropouts": d}) for d in drops]
     cases += [(f"clock offset {o:g} s", {"clock_offset": o}) for o in offsets]
     cases += [("fwid raw CSV (NED)", {"raw": "fwid"})]
-    cases += [("take of 30 s", {"duration": 30.0})]
+    cases += [("take of 30 s", {"duration": 30.0}), ("take of 60 s", {"duration": 60.0})]
     return [{"case": name, **DEFAULT, **over} for name, over in cases]
 
 
@@ -81,17 +83,29 @@ def simulate(folder: Path, case: dict, takes: int, duration: float, seed: int) -
 
 
 def run(cmd: list[str], timeout: float = 1800.0) -> tuple[float, subprocess.CompletedProcess]:
+    """Wall seconds and the process; `proc.cpu_s` its CPU seconds (user + system, all
+    threads) and `proc.load` the 1-minute load average before it started."""
+    import resource
+
+    load = os.getloadavg()[0]
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         proc = subprocess.CompletedProcess(cmd, 124, "", f"timed out after {timeout:.0f} s")
-    return time.perf_counter() - t0, proc
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    proc.cpu_s = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    proc.load = load
+    return wall, proc
 
 
-def fwid_reconstruct(raw: Path, out: Path, form: str, timeout: float = 1800.0) -> tuple[float, subprocess.CompletedProcess]:
+def fwid_reconstruct(raw: Path, out: Path, form: str, timeout: float = 1800.0,
+                     figures: bool = True) -> tuple[float, subprocess.CompletedProcess]:
     cmd = [sys.executable, "-m", "fwid.cli", "reconstruct", str(raw), "--out", str(out)]
-    return run(cmd + (["--body", "DelFly"] if form == "motive" else []), timeout)
+    cmd += ["--body", "DelFly"] if form == "motive" else []
+    return run(cmd + ([] if figures else ["--no-figures"]), timeout)
 
 
 def baseline(raw: Path, out: Path) -> tuple[float, subprocess.CompletedProcess]:
@@ -166,7 +180,7 @@ def one_case(case: dict, takes: int, duration: float, seed: int, work: Path) -> 
             res[name] = {"error": (proc.stderr.strip().splitlines() or ["?"])[-1], "rc": proc.returncode}
             continue
         try:
-            res[name] = {"wall_s": wall, **score(out, raw)}
+            res[name] = {"wall_s": wall, "cpu_s": proc.cpu_s, **score(out, raw)}
         except Exception as exc:  # a missing column or time base: report, go on
             res[name] = {"error": f"{type(exc).__name__}: {exc}"}
     return res
@@ -179,14 +193,15 @@ def speed(work: Path, takes: int, duration: float) -> dict:
     res = {"takes": takes, "duration_s": duration, "rate": 200.0, "simulate_s": time.perf_counter() - t0}
     cache = work / "jax-cache"  # an empty compilation cache: cold, then warm
     os.environ["FWID_JAX_CACHE"] = str(cache)
-    for label in ("fwid_cold", "fwid_warm"):
-        wall, proc = fwid_reconstruct(raw, work / label, "motive", timeout=600.0)
-        res[label] = {"wall_s": wall, "rc": proc.returncode}
+    for label in ("fwid_cold", "fwid_warm", "fwid_warm_no_figures"):
+        wall, proc = fwid_reconstruct(raw, work / label, "motive", timeout=600.0,
+                                      figures=label != "fwid_warm_no_figures")
+        res[label] = {"wall_s": wall, "cpu_s": proc.cpu_s, "load": proc.load, "rc": proc.returncode}
         if proc.returncode != 0:
             res[label]["error"] = (proc.stderr.strip().splitlines() or ["?"])[-1]
     del os.environ["FWID_JAX_CACHE"]
     wall, proc = baseline(raw, work / "baseline")
-    res["baseline"] = {"wall_s": wall, "rc": proc.returncode}
+    res["baseline"] = {"wall_s": wall, "cpu_s": proc.cpu_s, "load": proc.load, "rc": proc.returncode}
     for label in ("fwid_warm", "baseline"):
         if res[label]["rc"] == 0:
             try:
@@ -225,17 +240,25 @@ def markdown(res: dict) -> str:
     sp = res.get("speed")
     if sp:
         lines += ["", f"## Speed: {sp['takes']} takes of {sp['duration_s']:g} s at 200 Hz, whole process", "",
-                  "Each run once, on a machine shared with other work (load in the JSON).", "",
-                  "| run | wall s | q ca % | Z ca % | M ca % | M h1 % |", "|---|---:|---:|---:|---:|---:|"]
-        for label in ("fwid_cold", "fwid_warm", "baseline"):
-            r = sp[label]
+                  "Each run once, in a row, on a machine shared with other work: `cpu s` is the "
+                  "process's CPU time (user + system, all threads), `load` the 1-minute load "
+                  "average as it started (2 cores). `fwid_warm_no_figures`: `--no-figures`.", "",
+                  "| run | wall s | cpu s | load | q ca % | Z ca % | M ca % | M h1 % |",
+                  "|---|---:|---:|---:|---:|---:|---:|---:|"]
+        for label in ("fwid_cold", "fwid_warm", "fwid_warm_no_figures", "baseline"):
+            r = sp.get(label)
+            if r is None:
+                continue
             e = r.get("errors")
-            cells = [_fmt(r["wall_s"])] + ([_fmt(e[c]["ca"]) for c in ("q", "Z", "M")] + [_fmt(e["M"]["h1"])]
-                                           if e else ["-"] * 4)
+            cells = [_fmt(r["wall_s"]), _fmt(r.get("cpu_s")), _fmt(r.get("load"))]
+            cells += ([_fmt(e[c]["ca"]) for c in ("q", "Z", "M")] + [_fmt(e["M"]["h1"])] if e else ["-"] * 4)
             lines.append(f"| {label} | " + " | ".join(cells) + (f" (failed: {r['error']})" if "error" in r else "") + " |")
-        w, b = sp["fwid_warm"], sp["baseline"]
-        if w.get("rc") == 0 and b.get("rc") == 0:
-            lines += ["", f"Warm `fwid reconstruct` / baseline wall time: {w['wall_s'] / b['wall_s']:.2f}."]
+        b = sp["baseline"]
+        for label in ("fwid_warm", "fwid_warm_no_figures"):
+            w = sp.get(label, {})
+            if w.get("rc") == 0 and b.get("rc") == 0:
+                lines += ["", f"`{label}` / baseline: wall {w['wall_s'] / b['wall_s']:.2f}, "
+                          f"CPU {w['cpu_s'] / b['cpu_s']:.2f}."]
     return "\n".join(lines) + "\n"
 
 

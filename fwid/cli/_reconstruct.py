@@ -25,8 +25,9 @@ def reconstruct(args) -> int:
     if result.flights and args.figures:
         from fwid.report import plot_reconstruction
 
+        fig = None  # one figure, redrawn take after take
         for fl in result.flights:
-            plot_reconstruction(fl, path=out / f"{fl.name}.reconstruction.png")
+            fig = plot_reconstruction(fl, path=out / f"{fl.name}.reconstruction.png", figure=fig)
     n = len(result.flights)
     print(f"fwid: reconstructed {n} of {n + len(result.failures)} takes into {out}/ "
           f"({len(written)} files, {time.perf_counter() - t0:.1f} s)")

@@ -21,7 +21,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy import interpolate, optimize, signal
+
+# scipy is imported where used: a take without an autopilot log never needs it (and its
+# import is a good part of a short run)
 
 #: Low-pass of the coarse search, as a fraction of the flapping frequency.
 COARSE_CUTOFF = 0.35
@@ -42,6 +44,8 @@ class ClockOffset(NamedTuple):
 def lowpass(t: np.ndarray, x: np.ndarray, cutoff: float) -> np.ndarray:
     """Zero-phase 8th-order Butterworth low-pass of uniformly sampled `x` (along axis 0),
     or `x` itself when `cutoff` is at or above 0.9 x Nyquist."""
+    from scipy import signal
+
     rate = (len(t) - 1) / (t[-1] - t[0])
     if cutoff >= 0.45 * rate or len(t) < 60:
         return x
@@ -53,6 +57,8 @@ def resample(t_src: np.ndarray, x: np.ndarray, t_dst: np.ndarray) -> np.ndarray:
     """`x` (on the uniform `t_src`) at the times `t_dst` (uniform): low-passed below 0.45
     times the destination rate first when the source is faster (no aliasing), then a cubic
     spline; NaN outside `t_src`."""
+    from scipy import interpolate
+
     rate_dst = (len(t_dst) - 1) / (t_dst[-1] - t_dst[0])
     x = lowpass(t_src, np.asarray(x, float), 0.45 * rate_dst)
     out = interpolate.CubicSpline(t_src, x, axis=0, extrapolate=False)(t_dst)
@@ -62,6 +68,8 @@ def resample(t_src: np.ndarray, x: np.ndarray, t_dst: np.ndarray) -> np.ndarray:
 def _xcorr(a: np.ndarray, b: np.ndarray, min_n: int):
     """Normalised cross-correlation of `a` `(Na, 3)` against `b` `(Nb, 3)`, summed over
     the columns: `(lags, values)`, lag `l` pairing `a[n + l]` with `b[n]`."""
+    from scipy import signal
+
     num = sum(signal.correlate(a[:, i], b[:, i], mode="full", method="fft") for i in range(3))
     ones_a, ones_b = np.ones(len(a)), np.ones(len(b))
     ea = signal.correlate(np.sum(a**2, 1), ones_b, mode="full", method="fft")
@@ -86,6 +94,8 @@ def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarra
 
     **Returns:** a `ClockOffset`, or None when no lag leaves `min_overlap` in common.
     """
+    from scipy import interpolate, optimize, signal
+
     dt = (t[-1] - t[0]) / (len(t) - 1)
     spline = interpolate.CubicSpline(t_log, lowpass(t_log, gyro, 0.45 / dt), axis=0,
                                      extrapolate=False)

@@ -64,26 +64,25 @@ def intensities(dt: float, f_c: float, f_h: float, omega0: float) -> tuple[float
     return dt * (2 * np.pi * f_c) ** 6, dt * omega0**4 * (2 * np.pi * f_h) ** 2
 
 
-def rows(phase: np.ndarray, omega: np.ndarray, rate: float, bias: bool) -> dict[str, np.ndarray]:
+def rows(phase, omega, rate, bias: bool, xp=np) -> dict:
     """The measurement and output rows `(..., N, n)` at each sample: `pos` (position or
-    attitude), `vel` (rate, without the bias), `acc`, `gyro` (rate plus bias)."""
-    n = n_states(bias)
-    shape = phase.shape
-    out = {k: np.zeros(shape + (n,)) for k in ("pos", "vel", "acc")}
-    out["pos"][..., 0], out["vel"][..., 1], out["acc"][..., 2] = 1.0, 1.0, 1.0
-    ok_f = np.isfinite(omega) & (omega > 0)
-    w_safe = np.where(ok_f, omega, 1.0)
+    attitude), `vel` (rate, without the bias), `acc`, `gyro` (rate plus bias). `xp`: the
+    array module (`numpy`, or `jax.numpy` inside a compiled program; `rate` may be traced)."""
+    zero, one = xp.zeros_like(phase), xp.ones_like(phase)
+    ok_f = xp.isfinite(omega) & (omega > 0)
+    w_safe = xp.where(ok_f, omega, 1.0)
+    pos, vel, acc = [one, zero, zero], [zero, one, zero], [zero, zero, one]
     for k in range(1, HARMONICS + 1):
-        on = ok_f & (k * w_safe / (2 * np.pi) < HARMONIC_LIMIT * rate)
-        c, s, kw = np.cos(k * phase), np.sin(k * phase), k * w_safe
-        j = 3 + 2 * (k - 1)
-        out["pos"][..., j], out["pos"][..., j + 1] = on * -c / kw**2, on * -s / kw**2
-        out["vel"][..., j], out["vel"][..., j + 1] = on * s / kw, on * -c / kw
-        out["acc"][..., j], out["acc"][..., j + 1] = on * c, on * s
-    out["gyro"] = out["vel"].copy()
+        on = xp.where(ok_f & (k * w_safe / (2 * np.pi) < HARMONIC_LIMIT * rate), 1.0, 0.0)
+        c, s, kw = xp.cos(k * phase), xp.sin(k * phase), k * w_safe
+        pos += [on * -c / kw**2, on * -s / kw**2]
+        vel += [on * s / kw, on * -c / kw]
+        acc += [on * c, on * s]
+    gyro = list(vel)
     if bias:
-        out["gyro"][..., -1] = 1.0
-    return out
+        pos, vel, acc, gyro = pos + [zero], vel + [zero], acc + [zero], gyro + [one]
+    return {k: xp.stack(v, -1) for k, v in (("pos", pos), ("vel", vel), ("acc", acc),
+                                             ("gyro", gyro))}
 
 
 def prior(n: int, bias: bool, scale: float) -> np.ndarray:

@@ -93,8 +93,10 @@ def _fill_empty(text: str) -> str:
 def _parse_fast(lines: list[str], width: int | None) -> np.ndarray | None:
     """numpy's C parser on the text with empty cells written `nan`; None where it fails (a
     cell that is not a number, ragged rows: the slow path says where)."""
-    text = "\n".join(ln.rstrip("\r") for ln in lines if ln.strip())
-    if not text:
+    text = "\n".join(lines)  # one join in C; blank lines are skipped by numpy's parser
+    if "\r" in text:
+        text = text.replace("\r", "")
+    if not text.strip():
         return None
     try:
         with warnings.catch_warnings():

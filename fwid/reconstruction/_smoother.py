@@ -18,7 +18,7 @@ import numpy as np
 
 from . import _model as mdl
 
-#: Samples used to choose the noise levels (from the middle of a take).
+#: Samples used to choose the noise levels (the window where the slow motion is most active).
 ML_WINDOW = 1000
 #: Largest memory (bytes) of the stored smoother gains of one vmapped call.
 GAIN_BYTES = 2e8
@@ -27,10 +27,14 @@ _JIT = {}
 
 
 def _fns():
+    """The compiled programs: `grid` (the log-likelihood of each problem at each grid point)
+    and `smooth` (the smoothed totals), both building the measurement rows and the inputs of
+    the model from the flapping phase inside (no `(M, N, m, n)` array crosses to JAX)."""
     if not _JIT:
         import functools
 
         import jax
+        import jax.numpy as jnp
 
         from ._kalman import concentrated_loglik, filter_stats, smooth
 
@@ -38,36 +42,68 @@ def _fns():
         filter_stats = functools.partial(filter_stats, lead=lead)
         smooth = functools.partial(smooth, lead=lead)
 
-        stats = jax.vmap(jax.vmap(filter_stats, in_axes=(None, 0, None, 0, None, None, None,
-                                                         None, None)),
-                         in_axes=(None, 0, 0, None, 0, 0, 0, 0, None))
+        def model(phase, omega, rate, Z, u, n):
+            bias = Z.shape[-2] == 2
+            rows = mdl.rows(phase, omega, rate, bias, xp=jnp)
+            H = jnp.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), -2)  # (N, m, n)
+            U = jnp.zeros(u.shape[:-1] + (n,) + u.shape[-1:]).at[..., 0, :].set(u)
+            return rows, H, U
+
+        def one_stats(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
+            _, H, U = model(phase, omega, rate, Z, u, F.shape[0])
+            return jax.vmap(filter_stats, in_axes=(None, 0, None, 0, None, None, None, None,
+                                                   None))(F, Q, H, R, Z, MK, U, m0, P0)
+
+        def one_smooth(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
+            rows, H, U = model(phase, omega, rate, Z, u, F.shape[0])
+            x, st = smooth(F, Q, H, R, Z, MK, U, m0, P0)
+            out = [jnp.einsum("kn,knc->kc", rows[k], x) for k in ("pos", "vel", "acc")]
+            return (*out, x[0, -1, :], st)
+
+        stats = jax.vmap(one_stats, in_axes=(None, 0, 0, 0, None, None, 0, 0, 0, 0, None))
         _JIT["grid"] = jax.jit(lambda *a: concentrated_loglik(stats(*a)))
-        _JIT["smooth"] = jax.jit(jax.vmap(smooth, in_axes=(None, 0, 0, 0, 0, 0, 0, 0, None)))
+        _JIT["smooth"] = jax.jit(jax.vmap(one_smooth, in_axes=(None, 0, 0, 0, None, 0, 0, 0, 0,
+                                                               0, None)))
     return _JIT
 
 
-def _active_window(z, u, mask, dt, lengths=None) -> np.ndarray:
+def _cycle_mean(y: np.ndarray, w: int) -> np.ndarray:
+    """`y` `(N, c)` averaged over `w` samples, twice (centred, edges held): the flapping
+    harmonics of a period of about `w` samples cancel, the slow motion stays."""
+    for _ in range(2):
+        pad = np.pad(y, ((w // 2, w - 1 - w // 2), (0, 0)), mode="edge")
+        c = np.cumsum(np.concatenate([np.zeros((1, y.shape[1])), pad]), 0)
+        y = (c[w:] - c[:-w]) / w
+    return y
+
+
+def _active_window(z, u, mask, dt, lengths=None, omega=None) -> np.ndarray:
     """Sample indices `(M, W)` of each problem's most active `ML_WINDOW` samples, where the
-    noise levels are chosen: the window with the largest energy of the second difference of
-    the measured path (`z` less the summed inputs `u`), averaged over ~0.1 s (a take that is
-    quiet but for its manoeuvre must be smoothed as its manoeuvre needs). `lengths` `(M,)`:
-    each problem's own samples (the rest pads it to the batch's length), all by default."""
+    noise levels are chosen: the window where the slow (cycle-averaged) motion accelerates
+    most. The measured path (`z` less the summed inputs `u`) is averaged over one flapping
+    cycle (twice, `omega` the flapping angular frequency `(M, N)`; 0.1 s without it), and
+    its second difference over one cycle squared: the manoeuvre, not the flapping (which is
+    as large in steady flight), decides; a take that is quiet but for its manoeuvre must be
+    smoothed as its manoeuvre needs, whatever its length. `lengths` `(M,)`: each problem's
+    own samples (the rest pads it to the batch's length), all by default."""
     M, N = mask.shape
     W = min(N, ML_WINDOW)
     lengths = np.full(M, N) if lengths is None else np.asarray(lengths, int)
     path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
-    k = max(1, int(round(0.1 / dt)))
     out = np.empty((M, W), int)
     for m in range(M):
         N = int(lengths[m])
+        w0 = np.nanmedian(omega[m, :N]) if omega is not None else np.nan
+        k = int(round(2 * np.pi / (w0 * dt))) if np.isfinite(w0) and w0 > 0 else int(round(0.1 / dt))
+        k = max(1, min(k, N // 8))
         y = path[m, :N]
         good = np.isfinite(y[:, 0])
         y = np.stack([np.interp(np.arange(N), np.flatnonzero(good), c[good]) for c in y.T], 1)
-        kernel = np.ones(k) / k
-        sm = np.stack([np.convolve(c, kernel, mode="same") for c in y.T], 1)
+        sm = _cycle_mean(y, k)
         a = np.zeros(N)
-        a[1:-1] = np.sum((sm[2:] - 2 * sm[1:-1] + sm[:-2]) ** 2, 1)
-        a[:k], a[-k:] = 0.0, 0.0  # the convolution's edges
+        if N > 2 * k:
+            a[k:-k] = np.sum((sm[2 * k:] - 2 * sm[k:-k] + sm[:-2 * k]) ** 2, 1)
+        a[:2 * k], a[N - 2 * k:] = 0.0, 0.0  # the averages' edges
         c = np.concatenate([[0.0], np.cumsum(a)])
         start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0  # past N: the padding
         out[m] = np.arange(start, start + W)
@@ -135,20 +171,18 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     bias = gyro is not None
     n = mdl.n_states(bias)
     rate = 1.0 / dt
-    rows = mdl.rows(phase, omega, rate, bias)
     m_meas = 2 if bias else 1
-    H = np.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), 2)  # (M, N, m, n)
+    phase, omega = np.asarray(phase, float), np.asarray(omega, float)
     Z = np.stack([np.nan_to_num(z)] + ([np.nan_to_num(gyro)] if bias else []), 2)
     MK = np.stack([mask] + ([gyro_mask] if bias else []), 2).astype(bool)
-    U = np.zeros((M, N, n, c))
-    if u is not None:
-        U[:, :, 0, :] = u
+    u = np.zeros((M, N, c)) if u is None else np.asarray(u, float)
     F = mdl.transition(dt, bias)
     P0 = mdl.prior(n, bias, scale)
     m0 = np.zeros((M, n, c))
     first = np.argmax(mask, axis=1)
     m0[:, 0, :] = z[np.arange(M), first]
     omega0 = np.array([np.nanmedian(o) if np.isfinite(o).any() else 2 * np.pi for o in omega])
+    common = (jnp.asarray(F), jnp.asarray(P0), jnp.asarray(rate))
 
     def noise(fc, fh, w0, ratio):
         qj, qh = mdl.intensities(dt, fc, fh, w0)
@@ -160,7 +194,7 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
                                            mdl.GYRO_RATIOS if bias else (1.0,)))] * M
         else:  # the motion's levels known (from the attitude alone): the gyro's noise only
             grid = [[(p[0], p[1], g) for g in mdl.GYRO_RATIOS] for p in params]
-        idx = _active_window(z, U[:, :, 0, :], mask, dt, lengths)  # (M, W)
+        idx = _active_window(z, u, mask, dt, lengths, omega)  # (M, W)
         take = lambda a: np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)  # noqa: E731
         Qs = np.stack([[noise(fc, fh, w0, g)[0] for fc, fh, g in gm] for gm, w0 in zip(grid, omega0)])
         Rs = np.stack([noise(1, 1, 1, g)[1] for _, _, g in grid[0]])
@@ -169,26 +203,28 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
         m0w = m0.copy()
         fw = np.argmax(take(mask), axis=1)
         m0w[:, 0, :] = take(z)[np.arange(M), fw]
-        (Qs, Hw, Zw, MKw, Uw, m0w), _ = _spread(Qs, take(H), take(Z), take(MK), take(U), m0w)
-        ll = np.asarray(fns["grid"](jnp.asarray(F), Qs, Hw, jnp.asarray(Rs), Zw, MKw, Uw, m0w,
-                                    jnp.asarray(P0)))[:M]
+        (Qs, phw, omw, Zw, MKw, uw, m0w), _ = _spread(Qs, take(phase), take(omega), take(Z),
+                                                      take(MK), take(u), m0w)
+        F_, P0_, rate_ = common
+        ll = np.asarray(fns["grid"](F_, Qs, phw, omw, rate_, jnp.asarray(Rs), Zw, MKw, uw, m0w,
+                                    P0_))[:M]
         best = np.argmax(np.where(np.isfinite(ll), ll, -np.inf), axis=1)
         params = [gm[b] for gm, b in zip(grid, best)]
     Q = np.stack([noise(fc, fh, w0, g)[0] for (fc, fh, g), w0 in zip(params, omega0)])
     R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
     chunk = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))
-    xs, acc = [], []
+    parts = []
+    F_, P0_, rate_ = common
     for a in range(0, M, chunk):
         s = slice(a, a + chunk)
-        (Qc, Hc, Rc, Zc, MKc, Uc, m0c), m = _spread(Q[s], H[s], R[s], Z[s], MK[s], U[s], m0[s])
-        x, st = fns["smooth"](jnp.asarray(F), Qc, Hc, Rc, Zc, MKc, Uc, m0c, jnp.asarray(P0))
-        xs.append(np.asarray(x)[:m])
-        acc.append(np.asarray(st)[:m])
-    x, acc = np.concatenate(xs), np.concatenate(acc)  # (M, N, n, c), (M, 3)
+        args, m = _spread(Q[s], phase[s], omega[s], R[s], Z[s], MK[s], u[s], m0[s])
+        res = fns["smooth"](F_, *args[:3], rate_, *args[3:], P0_)
+        parts.append([np.asarray(r)[:m] for r in res])
+    pos, vel, acc_, b, acc = (np.concatenate(p) for p in zip(*parts))
     s2 = acc[:, 1] / np.maximum(acc[:, 2], 1)  # the concentrated noise scale
-    out = {k: np.einsum("mkn,mknc->mkc", rows[k], x) for k in ("pos", "vel", "acc")}
+    out = {"pos": pos, "vel": vel, "acc": acc_}
     ratio = np.array([p[2] for p in params])
-    return Smoothed(out["pos"], out["vel"], out["acc"], x[:, 0, -1, :] if bias else None,
+    return Smoothed(out["pos"], out["vel"], out["acc"], b if bias else None,
                     np.sqrt(s2), np.sqrt(s2) * ratio if bias else None,
                     np.array([p[0] for p in params]), np.array([p[1] for p in params]),
                     list(params))

@@ -37,3 +37,41 @@ def test_padded_batch_equals_each_alone():
             got = getattr(both, k)[j, :N]
             assert np.max(np.abs(got - ref)) <= 1e-9 * np.max(np.abs(ref))
         assert abs(both.sigma[j] - alone.sigma[0]) <= 1e-9 * alone.sigma[0]
+
+
+def _manoeuvre(N, dt, rng):
+    """A pitch-like record: a 3-s manoeuvre at the start, then steady flapping flight (the
+    flapping as large throughout), 0.15 deg noise; returns the data and the true rate."""
+    t = np.arange(N) * dt
+    env = np.exp(-(((t - 2.0) / 0.8) ** 2))
+    slow = 0.15 * np.sin(2 * np.pi * 0.8 * (t - 2.0)) * env
+    dslow = 0.15 * env * (2 * np.pi * 0.8 * np.cos(2 * np.pi * 0.8 * (t - 2.0))
+                          - 2 * (t - 2.0) / 0.8**2 * np.sin(2 * np.pi * 0.8 * (t - 2.0)))
+    w = 2 * np.pi * 12.0
+    flap = 3e-3 * np.sin(w * t) + 1e-3 * np.sin(2 * w * t + 0.4)
+    dflap = 3e-3 * w * np.cos(w * t) + 2e-3 * w * np.cos(2 * w * t + 0.4)
+    z = (slow + flap + np.deg2rad(0.15) * rng.standard_normal(N))[:, None]
+    return z, np.ones(N, bool), *phase_of(np.full(N, 12.0), dt), dslow + dflap
+
+
+def test_long_take_smoothed_as_well_as_short():
+    """A manoeuvre followed by a minute of steady flight is smoothed as well as the same
+    manoeuvre in a short take: the noise levels suit the manoeuvre, not the steady part
+    (both in one padded batch, one compiled program)."""
+    dt, lengths = 0.01, np.array([600, 6000])
+    probs = [_manoeuvre(N, dt, np.random.default_rng(5)) for N in lengths]
+    n = lengths.max()
+
+    def pad(x, fill):
+        return np.concatenate([x, np.full((n - len(x),) + x.shape[1:], fill, dtype=x.dtype)])
+
+    z, mask, phase, omega = (np.stack([pad(p[i], f) for p in probs])
+                             for i, f in enumerate((np.nan, False, 0.0, np.nan)))
+    sm = smooth_batch(z, mask, phase, omega, dt, lengths=lengths)
+    err = []
+    for j, p in enumerate(probs):
+        e = sm.vel[j, :400, 0] - p[4][:400]  # the first 4 s: the manoeuvre
+        err.append(np.sqrt(np.mean(e**2)) / np.ptp(p[4][:400]))
+        assert abs(sm.sigma[j] - np.deg2rad(0.15)) < 0.2 * np.deg2rad(0.15)  # the noise found
+    assert err[0] < 0.05
+    assert err[1] < 1.5 * err[0], err
