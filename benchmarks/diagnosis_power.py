@@ -129,33 +129,45 @@ def _record_candidates(diag) -> list[dict]:
     return out
 
 
-def run_case(case: dict) -> dict:
-    """Simulate, diagnose and score one case (errors are recorded, not raised)."""
+def case_flights(case: dict, rec: dict):
+    """The case's training and test flights, written blind and loaded back (`rec` gains the
+    effect's noise ratio); `None` when the simulation diverged (recorded in `rec`)."""
     import fwid
     from diagnosis import _write
     from fwid.synth import effect_noise_ratio, random_vehicle
 
-    rec = dict(case)
     vehicle = random_vehicle(case["vehicle_seed"])
     kw = {"form": case["form"], "vehicle": vehicle, "noise": case["noise"],
           "duration": case["duration"], "rate": case["rate"]}
     if case["input"] != "cycle":
         kw["input"] = case["input"]
     effect = case["effect"]
+    if effect != "none":
+        r = effect_noise_ratio(effect, case["form"], case["strength"], (case["axis"],),
+                               vehicle=vehicle)
+        rec["noise_ratio"] = r["max"]
+    with tempfile.TemporaryDirectory() as d:
+        base = zlib.crc32(json.dumps(case, sort_keys=True).encode())  # flight seeds
+        _write(f"{d}/train", case["n"], case["axis"], base, effect, case["strength"], **kw)
+        _write(f"{d}/test", case["n"], case["axis"], base + 500, effect, case["strength"], **kw)
+        train, test = fwid.load_flights(f"{d}/train"), fwid.load_flights(f"{d}/test")
+    cols = ("q", "u", "w", "p", "r", "v", "X", "Z", "M", "Y", "L", "N")
+    if not all(np.all(np.isfinite(np.asarray(f[c]))) for f in train + test for c in cols):
+        rec["error"] = "diverged"  # e.g. the quadratic nonlinear-aero at strength 2
+        return None
+    return train, test
+
+
+def run_case(case: dict) -> dict:
+    """Simulate, diagnose and score one case (errors are recorded, not raised)."""
+    import fwid
+
+    rec = dict(case)
     try:
-        if effect != "none":
-            r = effect_noise_ratio(effect, case["form"], case["strength"], (case["axis"],),
-                                   vehicle=vehicle)
-            rec["noise_ratio"] = r["max"]
-        with tempfile.TemporaryDirectory() as d:
-            base = zlib.crc32(json.dumps(case, sort_keys=True).encode())  # flight seeds
-            _write(f"{d}/train", case["n"], case["axis"], base, effect, case["strength"], **kw)
-            _write(f"{d}/test", case["n"], case["axis"], base + 500, effect, case["strength"], **kw)
-            train, test = fwid.load_flights(f"{d}/train"), fwid.load_flights(f"{d}/test")
-        cols = ("q", "u", "w", "p", "r", "v", "X", "Z", "M", "Y", "L", "N")
-        if not all(np.all(np.isfinite(np.asarray(f[c]))) for f in train + test for c in cols):
-            rec["error"] = "diverged"  # e.g. the quadratic nonlinear-aero at strength 2
+        flights = case_flights(case, rec)
+        if flights is None:
             return rec
+        train, test = flights
         t0 = time.perf_counter()
         diag = fwid.diagnose(train, test, axis=case["axis"], simulation=False,
                              process_noise=False)
