@@ -17,8 +17,9 @@ and test flights), a noise scale U(0.5, 2), a flight length U(2.5, 8) s, a sampl
 one of them for every flight) and the axis (among those whose manoeuvre shows the form).
 
 **Split**: forms of even index (0, 2) with even seeds are the `dev` half, forms of odd index
-(1, 3) with odd seeds the `heldout` half; clean and out-of-catalogue cases split by seed
-parity. Choose thresholds on `dev`, report `heldout` only.
+(1, 3) with odd seeds the `heldout` half, and the forms in `HELDOUT_ONLY` (the direction-dependent
+and lag-plus-delay actuators) are in the `heldout` half only; clean and out-of-catalogue cases
+split by seed parity. Choose thresholds on `dev`, report `heldout` only.
 
 Per case: write the flights blind (sidecars deleted, `diagnosis._write`), `fwid.diagnose`,
 one JSON line in `results/diagnosis_power_{half}.jsonl`; then the summary
@@ -56,6 +57,9 @@ PAIR_COUNT = 6
 RATES = (100.0, 200.0, 300.0, 500.0)
 INPUTS = ("cycle", "3211", "211", "doublet", "pulse")
 HALVES = ("dev", "heldout")
+#: Forms in the held-out half only, whatever their index: members of a family that the
+#: development half never shows (the family, not a form, must generalise).
+HELDOUT_ONLY = {"actuator-dynamics": ("asymmetric", "lag-delay")}
 
 
 def _rng(case_key: str, seed: int):
@@ -78,7 +82,9 @@ def cases(half: str = "dev", seeds: int = 2) -> list[dict]:
 
     parity = HALVES.index(half)
     catalogue = EFFECTS[1:]
-    forms = {e: [f for i, f in enumerate(FORMS[e]) if i % 2 == parity] for e in catalogue}
+    forms = {e: [f for i, f in enumerate(FORMS[e])
+                 if (i % 2 == parity and f not in HELDOUT_ONLY.get(e, ()))
+                 or (half == "heldout" and f in HELDOUT_ONLY.get(e, ()))] for e in catalogue}
     out = []
 
     def add(kind, effect, form, strength, n, seed, rep=0):
