@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -130,15 +131,27 @@ def main(argv=None):
     ap.add_argument("--subset", nargs="*", default=[])
     ap.add_argument("--peer", choices=PEERS, default="sindy")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    ap.add_argument("--summarise", metavar="FILE.jsonl",
+                    help="only rewrite the summary of a finished run (its provenance kept)")
     args = ap.parse_args(argv)
+    if args.summarise:
+        path = Path(args.summarise)
+        first = json.loads(path.read_text().split("\n", 1)[0])["provenance"]
+        results = _provenance.records(path)
+        note = (f"Recomputed from `{path.name}`, whose run is the command and commit above; "
+                f"{len(results)} cases, one process, one case at a time.")
+        path.with_suffix(".md").write_text(_provenance.markdown(_text(args.half, results, note),
+                                                                first))
+        return
     todo = select(cases(args.half, args.seeds), args.subset, args.limit)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"diagnosis_peers_{args.half}"
     results = []
     t0 = time.perf_counter()
+    prov = _provenance.provenance()
     with open(stem.with_suffix(".jsonl"), "w") as fh:
-        fh.write(_provenance.jsonl_first_line())
+        fh.write(_provenance.jsonl_first_line(prov))
         for i, case in enumerate(todo, 1):
             r = run_case(case)
             results.append(r)
@@ -147,20 +160,24 @@ def main(argv=None):
             print(f"[{i}/{len(todo)}] {r['kind']} {r['effect']}/{r['form']} {r['axis']}: "
                   f"fwid {r.get('fwid', {}).get('verdict', r.get('error'))}, "
                   f"sindy {r.get('sindy', {}).get('verdict')}", flush=True)
-    import os
     load = os.getloadavg()
-    text = "\n".join([
-        f"# fwid diagnose beside a SINDy peer ({args.half} half)", "",
-        f"{len(todo)} cases, `diagnosis_power.py`'s generator, the same flights for both; "
-        f"{time.perf_counter() - t0:.0f} s in all, load average {load[0]:.1f} / {load[1]:.1f} "
-        "(1 / 5 min) at the end; one process, one case at a time.", "",
+    note = (f"{len(todo)} cases, {time.perf_counter() - t0:.0f} s in all, load average "
+            f"{load[0]:.1f} / {load[1]:.1f} (1 / 5 min) at the end; one process, one case at a "
+            "time.")
+    text = _text(args.half, results, note)
+    stem.with_suffix(".md").write_text(_provenance.markdown(text, prov))
+    print(text)
+
+
+def _text(half, results, note) -> str:
+    return "\n".join([
+        f"# fwid diagnose beside a SINDy peer ({half} half)", "",
+        f"`diagnosis_power.py`'s generator, the same flights for both. {note}", "",
         "Right: the injected effect (single), no catalogue name (clean, out of catalogue). "
         "Decisive: right and nothing else kept (fwid: the confidence set; SINDy: the families "
-        "whose kept terms lower the test error). fwid runs without its simulation block "
-        "and process-noise fit, as in `diagnosis_power.py`.", "",
+        "whose kept terms lower the test error by more than its `MIN_GAIN_PCT`). fwid runs "
+        "without its simulation block and process-noise fit, as in `diagnosis_power.py`.", "",
         *table(results), "", "## Per case", "", *per_case(results), ""])
-    stem.with_suffix(".md").write_text(_provenance.markdown(text))
-    print(text)
 
 
 if __name__ == "__main__":
