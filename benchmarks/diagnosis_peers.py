@@ -133,13 +133,14 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     ap.add_argument("--summarise", metavar="FILE.jsonl",
                     help="only rewrite the summary of a finished run (its provenance kept)")
+    ap.add_argument("--note", default="", help="with --summarise: a line about the run")
     args = ap.parse_args(argv)
     if args.summarise:
         path = Path(args.summarise)
         first = json.loads(path.read_text().split("\n", 1)[0])["provenance"]
         results = _provenance.records(path)
         note = (f"Recomputed from `{path.name}`, whose run is the command and commit above; "
-                f"{len(results)} cases, one process, one case at a time.")
+                f"{len(results)} cases, one process, one case at a time. {args.note}")
         path.with_suffix(".md").write_text(_provenance.markdown(_text(args.half, results, note),
                                                                 first))
         return
