@@ -48,23 +48,33 @@ def _fwid(train, test, axis) -> dict:
     return {"verdict": diag.verdict, "confidence_set": diag.confidence_set, "wall_s": wall}
 
 
-def _sindy(train, test, axis) -> dict:
+def _sindy(train, test, axis, derivatives=True) -> dict:
     from peers.sindy import diagnose
 
-    return diagnose(train, test, axis)
+    return diagnose(train, test, axis, derivatives=derivatives)
 
 
-def run_case(case: dict) -> dict:
+def _key(case: dict) -> str:
+    return json.dumps({k: case[k] for k in ("kind", "effect", "form", "strength", "n", "seed",
+                                            "rep")}, sort_keys=True)
+
+
+def run_case(case: dict, fwid_rec: dict | None = None, derivatives: bool = True) -> dict:
+    """Both methods on one case; with `fwid_rec` (fwid's record of the same case from an
+    earlier run) only the peer runs."""
     rec = dict(case)
     try:
         flights = case_flights(case, rec)
         if flights is None:
             return rec
         train, test = flights
-        f = _fwid(train, test, case["axis"])
-        rec["fwid"] = {"verdict": f["verdict"], "wall_s": f["wall_s"],
-                       "confidence_set": f["confidence_set"]}
-        rec["sindy"] = _sindy(train, test, case["axis"])
+        if fwid_rec is not None:
+            rec["fwid"] = fwid_rec
+        else:
+            f = _fwid(train, test, case["axis"])
+            rec["fwid"] = {"verdict": f["verdict"], "wall_s": f["wall_s"],
+                           "confidence_set": f["confidence_set"]}
+        rec["sindy"] = _sindy(train, test, case["axis"], derivatives)
     except Exception as exc:  # noqa: BLE001 - a benchmark records, it does not stop
         rec["error"] = f"{type(exc).__name__}: {exc}"
     return rec
@@ -134,6 +144,12 @@ def main(argv=None):
     ap.add_argument("--summarise", metavar="FILE.jsonl",
                     help="only rewrite the summary of a finished run (its provenance kept)")
     ap.add_argument("--note", default="", help="with --summarise: a line about the run")
+    ap.add_argument("--reuse-fwid", metavar="FILE.jsonl",
+                    help="take fwid's records of the same cases from an earlier run; run only "
+                    "the peer")
+    ap.add_argument("--no-derivatives", action="store_true",
+                    help="the SINDy library without the states' time derivatives")
+    ap.add_argument("--name", default="", help="suffix of the results files")
     args = ap.parse_args(argv)
     if args.summarise:
         path = Path(args.summarise)
@@ -147,14 +163,17 @@ def main(argv=None):
     todo = select(cases(args.half, args.seeds), args.subset, args.limit)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    stem = out / f"diagnosis_peers_{args.half}"
+    stem = out / f"diagnosis_peers_{args.half}{args.name}"
+    earlier = ({_key(r): r["fwid"] for r in _provenance.records(Path(args.reuse_fwid))
+                if "fwid" in r} if args.reuse_fwid else {})
     results = []
     t0 = time.perf_counter()
     prov = _provenance.provenance()
     with open(stem.with_suffix(".jsonl"), "w") as fh:
         fh.write(_provenance.jsonl_first_line(prov))
         for i, case in enumerate(todo, 1):
-            r = run_case(case)
+            r = run_case(case, earlier.get(_key(case)) if args.reuse_fwid else None,
+                         not args.no_derivatives)
             results.append(r)
             fh.write(json.dumps(r) + "\n")
             fh.flush()

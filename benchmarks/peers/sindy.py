@@ -14,8 +14,9 @@ each column labelled with its family:
 - `actuator-dynamics`: the deflection through a first-order lag and a pure delay, a few values
   each (`ACT_TAUS`);
 - `time-offset`: the deflection shifted earlier by a few values (`LEADS`);
-- `unsteady-aero`: the time derivatives of the axis's states (`pysindy.FiniteDifference`),
-  except the states the load is reconstructed from (their derivative *is* the load);
+- `unsteady-aero` (unless `derivatives=False`): the time derivatives of the axis's states
+  (`pysindy.FiniteDifference`), except the states the load is reconstructed from (their
+  derivative *is* the load);
 - `lon-lat-coupling`: the other axis's states and control;
 - `flap-frequency`: the flapping-frequency deviation and its square;
 - `flap-coupling` (flapping part): every cycle-averaged state and input times the harmonics
@@ -57,7 +58,7 @@ MIN_GAIN_PCT = 2.0
 SLOW_RATE = 50.0
 
 
-def _columns(s, axis: str, load: str, band: str):
+def _columns(s, axis: str, load: str, band: str, derivatives: bool = True):
     """(target, base columns, effect columns, effect labels) of one flight."""
     xs = np.stack([s.slow[x] for x in AXIS_STATES[axis]], axis=1)
     d = s.slow[AXIS_INPUT[axis]]
@@ -74,10 +75,12 @@ def _columns(s, axis: str, load: str, band: str):
         labels += ["actuator-dynamics"] * len(act)
         cols.append(np.stack([lagged(d, s.dt, "delay", -t) for t in LEADS], axis=1))
         labels += ["time-offset"] * len(LEADS)
-        others = [x for x in AXIS_STATES[axis] if x not in OWN[load]]
-        fd = ps.FiniteDifference()
-        cols.append(np.stack([fd(s.slow[x][:, None], t=s.dt)[:, 0] for x in others], axis=1))
-        labels += ["unsteady-aero"] * len(others)
+        if derivatives:
+            others = [x for x in AXIS_STATES[axis] if x not in OWN[load]]
+            fd = ps.FiniteDifference()
+            cols.append(np.stack([fd(s.slow[x][:, None], t=s.dt)[:, 0] for x in others],
+                                 axis=1))
+            labels += ["unsteady-aero"] * len(others)
         o = other(axis)
         cols.append(np.stack([s.slow.get(x, np.zeros(s.n)) for x in AXIS_STATES[o]
                               + (AXIS_INPUT[o],)], axis=1))
@@ -148,7 +151,7 @@ def _sse(g, w) -> float:
     return float(w @ g @ w)
 
 
-def diagnose(train, test, axis: str = "lon") -> dict:
+def diagnose(train, test, axis: str = "lon", derivatives: bool = True) -> dict:
     """The SINDy peer's verdict on `train` / `test` flights (fwid `Flight`s) of `axis`.
 
     **Returns:** a dict with `verdict` (a catalogue name or `none`), `families` (per family
@@ -165,10 +168,10 @@ def diagnose(train, test, axis: str = "lon") -> dict:
     regressions = 2 * len(AXIS_LOADS[axis])
     for load in AXIS_LOADS[axis]:
         for band in ("averaged", "flapping"):
-            tr = [_columns(s, axis, load, band) for s in st]
+            tr = [_columns(s, axis, load, band, derivatives) for s in st]
             labels = np.array(tr[0][3])
             gtr = [_gram(*c[:3]) for c in tr]
-            gte = sum(_gram(*_columns(s, axis, load, band)[:3]) for s in ss)
+            gte = sum(_gram(*_columns(s, axis, load, band, derivatives)[:3]) for s in ss)
             gall = sum(gtr)
             scale = float(sum(g[-1, -1] for g in gtr)) or 1.0
 
