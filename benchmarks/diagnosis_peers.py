@@ -161,6 +161,10 @@ def main(argv=None):
                                                                 first))
         return
     todo = select(cases(args.half, args.seeds), args.subset, args.limit)
+    if args.reuse_fwid:  # exactly the earlier run's cases (the generator may have grown since)
+        fields = ("kind", "effect", "form", "strength", "n", "seed", "rep", "axis",
+                  "vehicle_seed", "noise", "duration", "rate", "input")
+        todo = [{k: r[k] for k in fields} for r in _provenance.records(Path(args.reuse_fwid))]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"diagnosis_peers_{args.half}{args.name}"
