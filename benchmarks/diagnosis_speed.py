@@ -91,7 +91,8 @@ def main(argv=None):
            "load_average": [load0[0], load1[0]]}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(_provenance.json_text(res, indent=1))
+    prov = _provenance.provenance()  # once, before either file is written
+    out.with_suffix(".json").write_text(_provenance.json_text(res, prov, indent=1))
     prog = "\n".join(f"    {t:6.1f} s  {line}" for t, line in res["diagnose_progress"])
     text = "\n".join([
         "# Whole process: `fwid diagnose` (simulation block) against `fwid identify`, "
@@ -111,7 +112,7 @@ def main(argv=None):
         f"**diagnose / identify: {td / ti:.2f}x** (the issue asks at most 1.5x). "
         f"Verdict: `{verdict}`.", "",
         "Progress lines of the last timed diagnosis (seconds since its start):", "", prog, ""])
-    out.with_suffix(".md").write_text(_provenance.markdown(text))
+    out.with_suffix(".md").write_text(_provenance.markdown(text, prov))
     print(text)
 
 
