@@ -155,9 +155,11 @@ def diagnose(train, test, axis: str = "lon", derivatives: bool = True) -> dict:
     """The SINDy peer's verdict on `train` / `test` flights (fwid `Flight`s) of `axis`.
 
     **Returns:** a dict with `verdict` (a catalogue name or `none`), `families` (per family
-    with kept terms: how much the test error grows when it is left out, `gain_pct` of the
-    linear model's test error, and its terms kept), `kept` (the families whose kept terms
-    lower the test error, best first) and `wall_s`.
+    with kept terms: `gain_pct`, how much the test error grows when it is left out and the
+    rest refitted, in percent of the linear model's test error, averaged over the loads and
+    parts; `terms`, its terms kept), `kept` (the families with `gain_pct` above
+    `MIN_GAIN_PCT`, best first) and `wall_s`. With `derivatives=False` the library has no
+    `unsteady-aero` columns.
     """
     t0 = time.perf_counter()
     st = [signals(f) for f in train]
