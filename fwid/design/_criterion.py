@@ -74,6 +74,9 @@ class Multisine(eqx.Module):
 def parametrisation(name: str, grid: Grid, amplitude: float, switch_rate: float, band):
     """The basis signals `(k, n)`, the coefficient map (a [`Steps`][] or [`Multisine`][]) and
     a random start of the free variables of the parametrisation `name`."""
+    if name not in ("multisine", "steps"):
+        raise InputError(f"design: parametrisation must be 'multisine' or 'steps', got "
+                         f"{name!r}")
     if name == "multisine":
         freqs = harmonics(grid, (max(band[0], 1e-9), band[1]))
         if freqs.size == 0:

@@ -18,10 +18,10 @@ from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
 from ._affine import affine_responses
 from ._criterion import AffineLoss, objective, parametrisation as _parametrisation
-from ._information import (Setting, absolute, information, log_det, prior_matrix,
+from ._information import (Setting, absolute, information, prior_matrix,
                            vehicle_information)
 from ._optimise import _say, flip_search, minimise
-from ._signals import Grid, harmonics, input_3211, step_index
+from ._signals import Grid, input_3211
 from ._source import ATTITUDE, CONTROL, from_identification, from_report, report_prior
 
 #: The share of a given attitude limit the model's prediction may use (the rest is the
@@ -290,9 +290,6 @@ def design_input(
                          "relative); leave fast to None")
     crit = objective(criterion)
 
-    def total(M):
-        return crit(vehicle_information(setting, M) + base)
-
     if affine is not None:  # the information is a quadratic form in the coefficients
         loss = AffineLoss(affine, coef, jnp.asarray(base),
                           jnp.asarray(1.0 if bound is None else bound),
@@ -311,10 +308,11 @@ def design_input(
 
         def loss(x):
             M, ys = information(setting, setting.experiment(grid.t, bounded(signal(x))))
+            c = crit(vehicle_information(setting, M) + base)
             pen = 0.0
             if bound is not None:  # the rest of the way for a model nonlinear in the input
                 pen = PENALTY * jnp.mean(jax.nn.relu(jnp.abs(ys[:, att]) / bound - 1.0) ** 2)
-            return -total(M) + pen
+            return -c + pen
 
     starts = jax.vmap(start)(jax.random.split(jax.random.PRNGKey(seed), restarts))
     _say(progress, f"design: {parametrisation}, {k} variables, {restarts} restarts, "

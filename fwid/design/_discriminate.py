@@ -23,7 +23,8 @@ from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
 from ._design import check_limits
 from ._optimise import _say, minimise
-from ._signals import Grid, harmonics, input_3211, multisine, step_index, steps
+from ._criterion import parametrisation as _parametrisation
+from ._signals import Grid, input_3211
 
 
 class Discrimination(eqx.Module):
@@ -138,27 +139,11 @@ def design_discriminating(
         # a prediction that diverges (a nonlinear model) counts as over the bound
         return u * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, bound / peak), 0.0)
 
-    if parametrisation == "multisine":
-        freqs = harmonics(grid, (max(band[0], 1e-9), band[1]))
+    basis, coef, start = _parametrisation(parametrisation, grid, amplitude, switch_rate, band)
+    E = jnp.asarray(basis)
 
-        def signal(x):
-            return multisine(x, grid, freqs, amplitude)
-
-        def start(key):
-            a, p = jax.random.split(key)
-            return jnp.concatenate([jax.random.uniform(a, (freqs.size,), minval=0.2),
-                                    jax.random.uniform(p, (freqs.size,), maxval=2 * jnp.pi)])
-    elif parametrisation == "steps":
-        _, k = step_index(grid, switch_rate)
-
-        def signal(x):
-            return steps(x, grid, switch_rate, amplitude)
-
-        def start(key):
-            return 1.5 * jax.random.normal(key, (k,))
-    else:
-        raise InputError(f"design: parametrisation must be 'multisine' or 'steps', got "
-                         f"{parametrisation!r}")
+    def signal(x):
+        return coef(x) @ E
 
     def loss(x):  # the log: the distance spans decades between starts
         return -jnp.log(distance(bounded(signal(x)))[0] + 1e-300)
