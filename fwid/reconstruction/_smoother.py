@@ -92,20 +92,20 @@ def _active_window(z, u, mask, dt, lengths=None, omega=None) -> np.ndarray:
     path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
     out = np.empty((M, W), int)
     for m in range(M):
-        N = int(lengths[m])
-        w0 = np.nanmedian(omega[m, :N]) if omega is not None else np.nan
+        L = int(lengths[m])  # this problem's own samples
+        w0 = np.nanmedian(omega[m, :L]) if omega is not None else np.nan
         k = int(round(2 * np.pi / (w0 * dt))) if np.isfinite(w0) and w0 > 0 else int(round(0.1 / dt))
-        k = max(1, min(k, N // 8))
-        y = path[m, :N]
+        k = max(1, min(k, L // 8))
+        y = path[m, :L]
         good = np.isfinite(y[:, 0])
-        y = np.stack([np.interp(np.arange(N), np.flatnonzero(good), c[good]) for c in y.T], 1)
+        y = np.stack([np.interp(np.arange(L), np.flatnonzero(good), c[good]) for c in y.T], 1)
         sm = _cycle_mean(y, k)
-        a = np.zeros(N)
-        if N > 2 * k:
+        a = np.zeros(L)
+        if L > 2 * k:
             a[k:-k] = np.sum((sm[2 * k:] - 2 * sm[k:-k] + sm[:-2 * k]) ** 2, 1)
-        a[:2 * k], a[N - 2 * k:] = 0.0, 0.0  # the averages' edges
+        a[:2 * k], a[L - 2 * k:] = 0.0, 0.0  # the averages' edges
         c = np.concatenate([[0.0], np.cumsum(a)])
-        start = int(np.argmax(c[W:] - c[:-W])) if N > W else 0  # past N: the padding
+        start = int(np.argmax(c[W:] - c[:-W])) if L > W else 0  # past L: the padding
         out[m] = np.arange(start, start + W)
     return out
 
@@ -182,7 +182,7 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     first = np.argmax(mask, axis=1)
     m0[:, 0, :] = z[np.arange(M), first]
     omega0 = np.array([np.nanmedian(o) if np.isfinite(o).any() else 2 * np.pi for o in omega])
-    common = (jnp.asarray(F), jnp.asarray(P0), jnp.asarray(rate))
+    F_, P0_, rate_ = jnp.asarray(F), jnp.asarray(P0), jnp.asarray(rate)
 
     def noise(fc, fh, w0, ratio):
         qj, qh = mdl.intensities(dt, fc, fh, w0)
@@ -205,7 +205,6 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
         m0w[:, 0, :] = take(z)[np.arange(M), fw]
         (Qs, phw, omw, Zw, MKw, uw, m0w), _ = _spread(Qs, take(phase), take(omega), take(Z),
                                                       take(MK), take(u), m0w)
-        F_, P0_, rate_ = common
         ll = np.asarray(fns["grid"](F_, Qs, phw, omw, rate_, jnp.asarray(Rs), Zw, MKw, uw, m0w,
                                     P0_))[:M]
         best = np.argmax(np.where(np.isfinite(ll), ll, -np.inf), axis=1)
@@ -214,7 +213,6 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
     chunk = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))
     parts = []
-    F_, P0_, rate_ = common
     for a in range(0, M, chunk):
         s = slice(a, a + chunk)
         args, m = _spread(Q[s], phase[s], omega[s], R[s], Z[s], MK[s], u[s], m0[s])
