@@ -38,7 +38,7 @@ import numpy as np
 from ..data import Flight
 from ..identification import get_model
 from ..models import GreyBoxModel
-from ._catalogue import frequency_deviation, lagged, lagging_part
+from ._catalogue import actuator_filter, filter_text, frequency_deviation, lagging_part
 from ._probes import ATTITUDE, elapsed
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
 
@@ -78,10 +78,7 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     ctrl, out = AXIS_INPUT[axis], {}
     for name, variant in effects:
         if name == "actuator-dynamics":
-            kind, tau = variant
-            out[f"{ctrl}_eff"] = (f"{ctrl} minus its trim through a first-order lag, tau = "
-                                  f"{tau:g} s" if kind == "lag" else
-                                  f"{ctrl} minus its trim, delayed {tau:g} s")
+            out[f"{ctrl}_eff"] = f"{ctrl} minus its trim through a {filter_text(variant)}"
         elif name == "time-offset":
             out[f"{ctrl}_eff"] = f"{ctrl} minus its trim, shifted {float(variant):g} s earlier"
         elif name == "unsteady-aero":
@@ -183,8 +180,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
         new = {k: g(flight) for k, g in columns.items()}
         if shift is not None:
             d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
-            kind, tau = shift
-            new[control] = lagged(d, flight.dt, kind, tau)
+            new[control] = actuator_filter(d, flight.dt, shift)
         return flight.with_columns(**new) if new else flight
 
     return model, prepare, left_out

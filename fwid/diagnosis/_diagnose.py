@@ -10,7 +10,7 @@ import numpy as np
 
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
-from ._catalogue import CATALOGUE, Effect, quadratic_names
+from ._catalogue import CATALOGUE, Effect, filter_text, quadratic_names
 from ._confidence import LEVEL, as_rows, confidence_set, explanations, sequential
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
@@ -116,8 +116,7 @@ def _variant_text(v, axis: str = "lon") -> str | None:
     if all(isinstance(k, int) for k in v):  # a subset of nonlinear-aero's terms
         names = quadratic_names(axis)
         return "terms " + ", ".join(names[k] for k in v)
-    kind, tau = v
-    return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
+    return filter_text(v)
 
 
 #: A load is affected by an effect when its held-out gain is at least this share of the
