@@ -86,6 +86,17 @@ def acting(model: Model, channel) -> Model:
     return tuple((e, unwrap(v)) for e, v in model if e.band == band and acts_on(v, load))
 
 
+#: Costs within this relative distance of the least are a tie (`simplest_best`): members that
+#: act identically on the data differ only by rounding.
+TIE_RTOL = 1e-9
+
+
+def simplest_best(costs) -> int:
+    """Index of the least of `costs`, the first of those that tie with it (`TIE_RTOL`)."""
+    least = min(costs)
+    return next(k for k, c in enumerate(costs) if c <= least + TIE_RTOL * abs(least))
+
+
 class Engine:
     """Fits the baseline plus any model of `catalogue` effects to the `loads` of some units and
     scores it on others. Designs, units' normal equations and fits are cached, so forward selection
@@ -187,17 +198,19 @@ class Engine:
         """The variant of `effect` (added to `model`) with the least training error on units
         `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's); for
         an effect whose variants differ in size (`Effect.sized`), the least
-        leave-one-unit-out error instead (with fewer than three units, the training error)."""
+        leave-one-unit-out error instead (with fewer than three units, the training error).
+        Of members that tie, the first (the variants are listed simplest first): a rate limit
+        that never binds is a plain lag, and must not be reported as a rate limit."""
         if len(effect.variants) == 1:
             return effect.variants[0]
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         if effect.sized and len(idx) >= 3:
             costs = [sum(self.loo_error(idx, ch, model + ((effect, v),)) / sigma2[ch]
                          for ch in chans) for v in effect.variants]
-            return effect.variants[int(np.argmin(costs))]
-        costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
-                     for ch in chans) for v in effect.variants]
-        return effect.variants[int(np.argmin(costs))]
+        else:
+            costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
+                         for ch in chans) for v in effect.variants]
+        return effect.variants[simplest_best(costs)]
 
     def choose(self, idx, model: Model, effect: Effect, sigma2: dict) -> OnLoads:
         """`effect`'s variant (`best_variant`) and the loads it acts on: those of its band

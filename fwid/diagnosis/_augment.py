@@ -4,9 +4,9 @@ measured where a user sees it, in the simulated states.
 
 Each effect of the verdict becomes terms of the cycle-averaged model:
 
-- `actuator-dynamics` and `time-offset`: the acting deflection, the measured one through the
-  diagnosed lag or delay (a lead for `time-offset`), replaces it as the model's input
-  (`d_eff`, a prepared column; the time constant is the diagnosis's, the control derivative
+- `actuator-dynamics` and `time-offset`: the acting deflection, the cycle-averaged measured
+  one through the diagnosed filter (a lead for `time-offset`), replaces it as the model's
+  input (`d_eff`, a prepared column; the filter is the diagnosis's, the control derivative
   is re-estimated);
 - `unsteady-aero`: the lagging part `lag(x) - x` of the axis's measured states (the
   diagnosed time constant; prepared columns `u_lag`, ...) as extra inputs, with a derivative
@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data import Flight
+from ..decomposition import decompose
 from ..identification import get_model
 from ..models import GreyBoxModel
 from ._catalogue import actuator_filter, filter_text, frequency_deviation, lagging_part
@@ -78,9 +79,11 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     ctrl, out = AXIS_INPUT[axis], {}
     for name, variant in effects:
         if name == "actuator-dynamics":
-            out[f"{ctrl}_eff"] = f"{ctrl} minus its trim through a {filter_text(variant)}"
+            out[f"{ctrl}_eff"] = (f"cycle-averaged {ctrl} minus its trim through a "
+                                  f"{filter_text(variant)}")
         elif name == "time-offset":
-            out[f"{ctrl}_eff"] = f"{ctrl} minus its trim, shifted {float(variant):g} s earlier"
+            out[f"{ctrl}_eff"] = (f"cycle-averaged {ctrl} minus its trim, shifted "
+                                  f"{float(variant):g} s earlier")
         elif name == "unsteady-aero":
             for s in AXIS_STATES[axis]:
                 out[f"{s}_lag"] = (f"lag({s}) - {s}: {s} through a first-order lag of tau = "
@@ -95,10 +98,16 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     return out
 
 
-def augment(axis: str, effects: Sequence[tuple[str, object]]
+def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.0
             ) -> tuple[GreyBoxModel, Callable[[Flight], Flight], list[str]]:
     """The `axis` model (`fwid.longitudinal`/`fwid.lateral`) with `effects` (`(name,
     variant)` pairs as the diagnosis selected them) inside its EOM.
+
+    The acting deflection is the cycle-averaged measured one (below `cutoff` Hz, as the
+    diagnosis fitted the filter on the loads) through the chosen filter: a rate limit or a
+    direction-dependent lag is not linear, so it must see the same signal in both places
+    (the flapping ripple of the raw column would saturate a rate limit that the
+    cycle-averaged deflection never reaches).
 
     **Returns:** `(model, prepare, left_out)`: `prepare(flight)` adds the columns the model
     reads (the acting deflection), `left_out` the effects that have no cycle-averaged form.
@@ -180,7 +189,8 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
         new = {k: g(flight) for k, g in columns.items()}
         if shift is not None:
             d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
-            new[control] = actuator_filter(d, flight.dt, shift)
+            slow = np.asarray(decompose({ctrl: d}, flight.dt, split_cutoff=cutoff).averaged[ctrl])
+            new[control] = actuator_filter(slow, flight.dt, shift)
         return flight.with_columns(**new) if new else flight
 
     return model, prepare, left_out

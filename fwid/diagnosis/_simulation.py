@@ -48,7 +48,7 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     states, `100 (1 - sqrt(mean_s (after_s / before_s)^2))` over the states."""
     base = get_model(axis)
     states = list(base.outputs)
-    model, prepare, left_out = augment(axis, effects)
+    model, prepare, left_out = augment(axis, effects, cutoff)
     in_eom = [n for n, _ in effects if n not in left_out]
     # the baseline misses the effect, so its fit warns (coloured residuals, slow convergence):
     # expected here, kept in the summary rather than printed
