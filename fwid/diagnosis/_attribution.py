@@ -30,7 +30,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._catalogue import CATALOGUE, Effect, base_columns
+from ._catalogue import CATALOGUE, Effect, axis_of, base_columns
 from ._regression import (Projector, error, harmonic_series, local_design, normal_equations,
                           residual, solve)
 from ._signals import Signals
@@ -114,6 +114,7 @@ class Engine:
         self._fits: dict = {}
         self._normal: dict = {}
         self._loo: dict = {}
+        self._acting: dict = {}
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]
@@ -149,11 +150,14 @@ class Engine:
             h, dh = self.series(i, load) if model else (None, None)
             extra = []
             for e, v in model:
-                cols = e.columns(s, load, v, h, dh)
-                if e.replaces_input:  # the control is the last base column
-                    g = np.concatenate([g[:, :-1], cols], axis=1)
+                if e.replaces_input:  # the control is the last base column; the acting
+                    # deflection is the same for every load of the axis: made once
+                    key_in = (i, e.name, v, axis_of(load))
+                    if key_in not in self._acting:
+                        self._acting[key_in] = e.columns(s, load, v, h, dh)
+                    g = np.concatenate([g[:, :-1], self._acting[key_in]], axis=1)
                 else:
-                    extra.append(cols)
+                    extra.append(e.columns(s, load, v, h, dh))
             self._design[key] = np.concatenate([g] + extra, axis=1) if extra else g
         return self._design[key]
 

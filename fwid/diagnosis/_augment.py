@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
@@ -48,16 +49,56 @@ IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
           "lon-lat-coupling", "nonlinear-aero", "attitude", "drift")
 
 
-def _quadratic_terms(axis: str) -> list[tuple[str, Callable]]:
-    xs = AXIS_STATES[axis]
+def _quadratic_terms(axis: str, state_index: dict[str, int]) -> list[tuple[str, str, tuple]]:
+    """`nonlinear-aero`'s terms as `Term`s, in `_catalogue.quadratic_names` order."""
+    xs = [state_index[s] for s in AXIS_STATES[axis]]
+    names = AXIS_STATES[axis]
     out = []
-    for i, a in enumerate(xs):
-        out.append((f"{a}{a}", lambda s, i=i: s[i] * s[i]))
-        out.append((f"{a}|{a}|", lambda s, i=i: s[i] * jnp.abs(s[i])))
+    for i, a in enumerate(names):
+        out.append((f"_{a}{a}", "square", (xs[i],)))
+        out.append((f"_{a}|{a}|", "abs", (xs[i],)))
     for i in range(len(xs)):
         for j in range(i + 1, len(xs)):
-            out.append((f"{xs[i]}{xs[j]}", lambda s, i=i, j=j: s[i] * s[j]))
+            out.append((f"_{names[i]}{names[j]}", "cross", (xs[i], xs[j])))
     return out
+
+
+def _term(kind: str, idx: tuple, x, ue):
+    """One extra-load term: the extra input `ue[idx[0]]` (`"input"`), the state `x[idx[0]]`
+    (`"state"`), its square, `x |x|` (`"abs"`) or the product `x[i] x[j]` (`"cross"`)."""
+    if kind == "input":
+        return ue[idx[0]]
+    if kind == "state":
+        return x[idx[0]]
+    if kind == "square":
+        return x[idx[0]] * x[idx[0]]
+    if kind == "abs":
+        return x[idx[0]] * jnp.abs(x[idx[0]])
+    return x[idx[0]] * x[idx[1]]
+
+
+class Augmented(eqx.Module):
+    """The augmented model's state equation (`rates=True`: Eqs. 7-8 with the extra loads
+    entering as the aerodynamic ones do) or its loads (`rates=False`): `base(x, u[:1], p, c)`
+    plus, on each of the axis's loads `ld`, the sum over `terms` (`(suffix, kind, indices)`,
+    see `_term`) of `p[ld + suffix]` times the term, the extra inputs being `u[1:]`.
+
+    A module of static fields rather than a closure, so that the estimator's program for the
+    augmented model is kept across processes like the baseline's (`fwid.estimate`'s
+    exported-program cache describes it field by field)."""
+
+    base: Callable = eqx.field(static=True)
+    axis: str = eqx.field(static=True)
+    terms: tuple[tuple[str, str, tuple[int, ...]], ...] = eqx.field(static=True)
+    rates: bool = eqx.field(static=True)
+
+    def __call__(self, x, u, p, c):
+        ue = u[1:]
+        extra = [sum((p[f"{ld}{suffix}"] * _term(kind, idx, x, ue)
+                      for suffix, kind, idx in self.terms), 0.0 * x[0])
+                 for ld in AXIS_LOADS[self.axis]]
+        out = self.base(x, u[:1], p, c)
+        return out + (_load_rates(self.axis, extra, c) if self.rates else jnp.stack(extra))
 
 
 def _load_rates(axis: str, dF, c):
@@ -119,7 +160,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     control = ctrl
     shift = None  # (kind, tau) applied to the control column
     extra_inputs: list[str] = []
-    terms: list[tuple[str, Callable]] = []  # (suffix, g(x, u_extra)) per own load
+    terms: list[tuple[str, str, tuple]] = []  # (suffix, kind, indices) per own load (`_term`)
     left_out = []
     columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
 
@@ -128,7 +169,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
         extra_inputs.append(name)
         if column is not None:
             columns[name] = column
-        terms.append((name, lambda x, ue, j=j: ue[j]))
+        terms.append((name, "input", (j,)))
 
     for name, variant in effects:
         if name in ("actuator-dynamics", "time-offset"):
@@ -149,32 +190,21 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
             for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
                 add_input(s, None)
         elif name == "nonlinear-aero":
-            xs_idx = [state_index[s] for s in AXIS_STATES[axis]]
-            chosen = _quadratic_terms(axis)
+            chosen = _quadratic_terms(axis, state_index)
             if variant is not None:  # a subset of the terms (`_catalogue.QUADRATIC_SUBSETS`)
                 chosen = [chosen[k] for k in variant]
-            for suffix, g in chosen:
-                terms.append((f"_{suffix}", lambda x, ue, g=g: g(x[jnp.array(xs_idx)])))
+            terms.extend(chosen)
         elif name == "drift":
             add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))
             add_input("time2", lambda fl: elapsed(np.asarray(fl.t, dtype=float)) ** 2)
         elif name == "attitude":
             k = state_index[ATTITUDE[axis]]
-            terms.append((ATTITUDE[axis], lambda x, ue, k=k: x[k]))
+            terms.append((ATTITUDE[axis], "state", (k,)))
         else:
             left_out.append(name)
-    new = [f"{ld}{suffix}" for suffix, _ in terms for ld in loads]
-
-    def extra_loads(x, u, p):
-        ue = u[1:]
-        return [sum((p[f"{ld}{suffix}"] * g(x, ue) for suffix, g in terms), 0.0 * x[0])
-                for ld in loads]
-
-    def f(x, u, p, c):
-        return base.f(x, u[:1], p, c) + _load_rates(axis, extra_loads(x, u, p), c)
-
-    def forces(x, u, p, c):
-        return base.forces(x, u[:1], p, c) + jnp.stack(extra_loads(x, u, p))
+    new = [f"{ld}{suffix}" for suffix, _, _ in terms for ld in loads]
+    f = Augmented(base.f, axis, tuple(terms), rates=True)
+    forces = Augmented(base.forces, axis, tuple(terms), rates=False)
 
     params = {k: float(v) for k, v in base.params.items()}
     params.update({k: 0.0 for k in new})

@@ -163,22 +163,23 @@ def actuator_filter(x: np.ndarray, dt: float, variant: tuple) -> np.ndarray:
         b, a = bilinear([wn * wn], [1.0, 2.0 * p[1] * wn, wn * wn], fs=1.0 / dt)
         y, _ = lfilter(b, a, x, zi=lfilter_zi(b, a) * x[0])
         return y
-    if kind == "rate-limit":
-        k, step = 1.0 - np.exp(-dt / p[0]), p[1] * dt
-        y = np.empty_like(x)
-        prev, xm = x[0], 0.5 * (x + np.concatenate([x[:1], x[:-1]]))  # the step's midpoint
-        for i, xi in enumerate(xm):
-            prev += min(max(k * (xi - prev), -step), step)
-            y[i] = prev
-        return y
-    if kind == "asymmetric":
-        ku, kd = 1.0 - np.exp(-dt / p[0]), 1.0 - np.exp(-dt / p[1])
-        y = np.empty_like(x)
-        prev, xm = x[0], 0.5 * (x + np.concatenate([x[:1], x[:-1]]))
-        for i, xi in enumerate(xm):
-            prev += (ku if xi > prev else kd) * (xi - prev)
-            y[i] = prev
-        return y
+    if kind in ("rate-limit", "asymmetric"):  # stepped sample by sample, on Python floats
+        if kind == "rate-limit":
+            k, step = 1.0 - np.exp(-dt / p[0]), p[1] * dt
+
+            def gain(e):
+                return min(max(k * e, -step), step)
+        else:
+            ku, kd = 1.0 - np.exp(-dt / p[0]), 1.0 - np.exp(-dt / p[1])
+
+            def gain(e):
+                return (ku if e > 0.0 else kd) * e
+        xm = (0.5 * (x + np.concatenate([x[:1], x[:-1]]))).tolist()  # the steps' midpoints
+        out, prev = [], float(x[0])
+        for xi in xm:
+            prev += gain(xi - prev)
+            out.append(prev)
+        return np.asarray(out)
     raise ValueError(f"unknown actuator filter {variant!r}")
 
 

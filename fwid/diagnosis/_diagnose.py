@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -17,7 +18,7 @@ from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
 from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
-from ._simulation import SimulationGap, simulation_gap
+from ._simulation import SimulationGap, fit_baseline, simulation_gap
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
@@ -233,6 +234,14 @@ def diagnose(
     tr_sig = [signals(f, cutoff=cutoff) for f in train]
     te_sig = [signals(f, cutoff=cutoff) for f in test]
     check_excitation(tr_sig, axis)
+    # the baseline's output-error fit for the simulation block does not depend on the verdict:
+    # it runs in a worker thread (JAX releases the interpreter while it computes) beside the
+    # selection below, which is NumPy's
+    baseline = None
+    if simulation:
+        pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-baseline")
+        baseline = pool.submit(fit_baseline, train, test, axis, cutoff)
+        pool.shutdown(wait=False)  # the thread ends with the fit
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
@@ -433,7 +442,7 @@ def diagnose(
     if simulation:
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
             + " fitted by output error on the training flights, simulated on the test flights")
-        sim = simulation_gap(train, test, axis, in_sim, cutoff)
+        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result())
 
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,
