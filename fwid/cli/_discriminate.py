@@ -59,13 +59,11 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
     flights cannot tell them apart); for a report without a set, the first effect with a
     near-tie runner-up, else the first effect and its runner-up; else the two best-ranked
     candidates."""
+    from ..diagnosis._confidence import rivals
+
     variants = {c["effect"]: c.get("variant") for c in diag.get("candidates", [])}
     axis = diag.get("axis", "lon")
-    firsts: list[str] = []
-    for x in diag.get("confidence_set") or []:
-        named = [e for e in x["explanation"] if e in variants]
-        if named and named[0] not in firsts:
-            firsts.append(named[0])
+    firsts = rivals(diag.get("confidence_set") or [], list(variants))
     if len(firsts) >= 2:
         return [(n, _variant(variants.get(n), axis)) for n in firsts[:2]]
     rows = diag.get("effects") or []

@@ -212,3 +212,15 @@ def sequential(engine: Engine, halves: Sequence[Half], first: dict[str, Evidence
         out.append((e, ev))
         models = [m + ((e, v),) for m, v in zip(models, ev.variants)]
     return out
+
+
+def rivals(rows: Sequence[dict], named: Sequence[str]) -> list[str]:
+    """The distinct first effects among `named` (the catalogue's) of the kept explanations
+    `rows` (`as_rows`, best first): two or more when the flights cannot tell catalogue
+    effects apart, the case a discriminating input is for (`fwid design --discriminate`)."""
+    out: list[str] = []
+    for row in rows:
+        first = next((e for e in row["explanation"] if e in named), None)
+        if first is not None and first not in out:
+            out.append(first)
+    return out

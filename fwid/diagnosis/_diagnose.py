@@ -12,7 +12,7 @@ import numpy as np
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
 from ._catalogue import CATALOGUE, Effect, filter_text, quadratic_names
-from ._confidence import LEVEL, as_rows, confidence_set, explanations, sequential
+from ._confidence import LEVEL, as_rows, confidence_set, explanations, rivals, sequential
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
@@ -77,6 +77,20 @@ class Diagnosis:
         raise KeyError(name)
 
     @property
+    def next_flight(self) -> dict | None:
+        """When the confidence set keeps explanations led by different catalogue effects,
+        the flight that would tell the first two apart: `{"tell_apart": [X, Y], "how": ...}`
+        (`fwid design --discriminate`); `None` otherwise."""
+        pair = rivals(self.confidence_set, [c["effect"] for c in self.candidates])[:2]
+        if len(pair) < 2:
+            return None
+        return {"tell_apart": pair,
+                "how": f"these flights cannot tell {pair[0]} from {pair[1]}: fly the input of "
+                       "`fwid design --discriminate DIAGNOSIS_DIR` (the manoeuvre over which "
+                       "the two augmented models' predictions differ most), then diagnose "
+                       "again with that flight among the test flights"}
+
+    @property
     def lead(self) -> dict | None:
         """The candidate behind the verdict: the effect named, the probe of an
         `"unexplained"` verdict, or `None`."""
@@ -95,6 +109,7 @@ class Diagnosis:
             "test": self.test,
             "candidates": self.candidates,
             "confidence_set": self.confidence_set,
+            "next_flight": self.next_flight,
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
