@@ -224,3 +224,17 @@ def rivals(rows: Sequence[dict], named: Sequence[str]) -> list[str]:
         if first is not None and first not in out:
             out.append(first)
     return out
+
+
+def next_flight(rows: Sequence[dict], named: Sequence[str]) -> dict | None:
+    """When the kept explanations `rows` are led by different catalogue effects (`rivals`),
+    the flight that would tell the first two apart: `{"tell_apart": [X, Y], "how": ...}`
+    (`fwid design --discriminate`); `None` otherwise."""
+    pair = rivals(rows, named)[:2]
+    if len(pair) < 2:
+        return None
+    return {"tell_apart": pair,
+            "how": f"these flights cannot tell {pair[0]} from {pair[1]}: fly the input of "
+                   "`fwid design --discriminate DIAGNOSIS_DIR` (the manoeuvre over which the "
+                   "two augmented models' predictions differ most), then diagnose again with "
+                   "that flight among the test flights"}

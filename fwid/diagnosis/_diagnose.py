@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -12,13 +11,13 @@ import numpy as np
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
 from ._catalogue import CATALOGUE, Effect, filter_text, quadratic_names
-from ._confidence import LEVEL, as_rows, confidence_set, explanations, rivals, sequential
+from ._confidence import LEVEL, as_rows, confidence_set, explanations, next_flight, sequential
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
 from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
-from ._simulation import SimulationGap, fit_baseline, simulation_gap
+from ._simulation import SimulationGap, simulation_gap, start_baseline
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
@@ -78,17 +77,8 @@ class Diagnosis:
 
     @property
     def next_flight(self) -> dict | None:
-        """When the confidence set keeps explanations led by different catalogue effects,
-        the flight that would tell the first two apart: `{"tell_apart": [X, Y], "how": ...}`
-        (`fwid design --discriminate`); `None` otherwise."""
-        pair = rivals(self.confidence_set, [c["effect"] for c in self.candidates])[:2]
-        if len(pair) < 2:
-            return None
-        return {"tell_apart": pair,
-                "how": f"these flights cannot tell {pair[0]} from {pair[1]}: fly the input of "
-                       "`fwid design --discriminate DIAGNOSIS_DIR` (the manoeuvre over which "
-                       "the two augmented models' predictions differ most), then diagnose "
-                       "again with that flight among the test flights"}
+        """`_confidence.next_flight` of the set: the flight that tells its rivals apart."""
+        return next_flight(self.confidence_set, [c["effect"] for c in self.candidates])
 
     @property
     def lead(self) -> dict | None:
@@ -249,14 +239,7 @@ def diagnose(
     tr_sig = [signals(f, cutoff=cutoff) for f in train]
     te_sig = [signals(f, cutoff=cutoff) for f in test]
     check_excitation(tr_sig, axis)
-    # the baseline's output-error fit for the simulation block does not depend on the verdict:
-    # it runs in a worker thread (JAX releases the interpreter while it computes) beside the
-    # selection below, which is NumPy's
-    baseline = None
-    if simulation:
-        pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-baseline")
-        baseline = pool.submit(fit_baseline, train, test, axis, cutoff)
-        pool.shutdown(wait=False)  # the thread ends with the fit
+    baseline = start_baseline(train, test, axis, cutoff) if simulation else None
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),

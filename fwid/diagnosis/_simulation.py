@@ -13,6 +13,7 @@ import dataclasses
 import math
 import warnings
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
@@ -51,6 +52,17 @@ def fit_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     with quiet_fits():
         return identify(list(train), get_model(axis), validate=list(test), joint=True,
                         cutoff=cutoff)
+
+
+def start_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
+                   cutoff: float = 5.0) -> Future:
+    """`fit_baseline` started in a worker thread: it does not depend on the verdict, and JAX
+    releases the interpreter while it computes, so it runs beside the diagnosis's selection
+    (NumPy's). The future's `result()` is `fit_baseline`'s, or raises its error."""
+    pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-baseline")
+    future = pool.submit(fit_baseline, train, test, axis, cutoff)
+    pool.shutdown(wait=False)  # the thread ends with the fit
+    return future
 
 
 def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
