@@ -17,8 +17,9 @@ and test flights), a noise scale U(0.5, 2), a flight length U(2.5, 8) s, a sampl
 one of them for every flight) and the axis (among those whose manoeuvre shows the form).
 
 **Split**: forms of even index (0, 2) with even seeds are the `dev` half, forms of odd index
-(1, 3) with odd seeds the `heldout` half; clean and out-of-catalogue cases split by seed
-parity. Choose thresholds on `dev`, report `heldout` only.
+(1, 3) with odd seeds the `heldout` half, and the forms in `HELDOUT_ONLY` (the direction-dependent
+and lag-plus-delay actuators) are in the `heldout` half only; clean and out-of-catalogue cases
+split by seed parity. Choose thresholds on `dev`, report `heldout` only.
 
 Per case: write the flights blind (sidecars deleted, `diagnosis._write`), `fwid.diagnose`,
 one JSON line in `results/diagnosis_power_{half}.jsonl`; then the summary
@@ -56,6 +57,9 @@ PAIR_COUNT = 6
 RATES = (100.0, 200.0, 300.0, 500.0)
 INPUTS = ("cycle", "3211", "211", "doublet", "pulse")
 HALVES = ("dev", "heldout")
+#: Forms in the held-out half only, whatever their index: members of a family that the
+#: development half never shows (the family, not a form, must generalise).
+HELDOUT_ONLY = {"actuator-dynamics": ("asymmetric", "lag-delay")}
 
 
 def _rng(case_key: str, seed: int):
@@ -78,7 +82,9 @@ def cases(half: str = "dev", seeds: int = 2) -> list[dict]:
 
     parity = HALVES.index(half)
     catalogue = EFFECTS[1:]
-    forms = {e: [f for i, f in enumerate(FORMS[e]) if i % 2 == parity] for e in catalogue}
+    forms = {e: [f for i, f in enumerate(FORMS[e])
+                 if (i % 2 == parity and f not in HELDOUT_ONLY.get(e, ()))
+                 or (half == "heldout" and f in HELDOUT_ONLY.get(e, ()))] for e in catalogue}
     out = []
 
     def add(kind, effect, form, strength, n, seed, rep=0):
@@ -129,33 +135,45 @@ def _record_candidates(diag) -> list[dict]:
     return out
 
 
-def run_case(case: dict) -> dict:
-    """Simulate, diagnose and score one case (errors are recorded, not raised)."""
+def case_flights(case: dict, rec: dict):
+    """The case's training and test flights, written blind and loaded back (`rec` gains the
+    effect's noise ratio); `None` when the simulation diverged (recorded in `rec`)."""
     import fwid
     from diagnosis import _write
     from fwid.synth import effect_noise_ratio, random_vehicle
 
-    rec = dict(case)
     vehicle = random_vehicle(case["vehicle_seed"])
     kw = {"form": case["form"], "vehicle": vehicle, "noise": case["noise"],
           "duration": case["duration"], "rate": case["rate"]}
     if case["input"] != "cycle":
         kw["input"] = case["input"]
     effect = case["effect"]
+    if effect != "none":
+        r = effect_noise_ratio(effect, case["form"], case["strength"], (case["axis"],),
+                               vehicle=vehicle)
+        rec["noise_ratio"] = r["max"]
+    with tempfile.TemporaryDirectory() as d:
+        base = zlib.crc32(json.dumps(case, sort_keys=True).encode())  # flight seeds
+        _write(f"{d}/train", case["n"], case["axis"], base, effect, case["strength"], **kw)
+        _write(f"{d}/test", case["n"], case["axis"], base + 500, effect, case["strength"], **kw)
+        train, test = fwid.load_flights(f"{d}/train"), fwid.load_flights(f"{d}/test")
+    cols = ("q", "u", "w", "p", "r", "v", "X", "Z", "M", "Y", "L", "N")
+    if not all(np.all(np.isfinite(np.asarray(f[c]))) for f in train + test for c in cols):
+        rec["error"] = "diverged"  # e.g. the quadratic nonlinear-aero at strength 2
+        return None
+    return train, test
+
+
+def run_case(case: dict) -> dict:
+    """Simulate, diagnose and score one case (errors are recorded, not raised)."""
+    import fwid
+
+    rec = dict(case)
     try:
-        if effect != "none":
-            r = effect_noise_ratio(effect, case["form"], case["strength"], (case["axis"],),
-                                   vehicle=vehicle)
-            rec["noise_ratio"] = r["max"]
-        with tempfile.TemporaryDirectory() as d:
-            base = zlib.crc32(json.dumps(case, sort_keys=True).encode())  # flight seeds
-            _write(f"{d}/train", case["n"], case["axis"], base, effect, case["strength"], **kw)
-            _write(f"{d}/test", case["n"], case["axis"], base + 500, effect, case["strength"], **kw)
-            train, test = fwid.load_flights(f"{d}/train"), fwid.load_flights(f"{d}/test")
-        cols = ("q", "u", "w", "p", "r", "v", "X", "Z", "M", "Y", "L", "N")
-        if not all(np.all(np.isfinite(np.asarray(f[c]))) for f in train + test for c in cols):
-            rec["error"] = "diverged"  # e.g. the quadratic nonlinear-aero at strength 2
+        flights = case_flights(case, rec)
+        if flights is None:
             return rec
+        train, test = flights
         t0 = time.perf_counter()
         diag = fwid.diagnose(train, test, axis=case["axis"], simulation=False,
                              process_noise=False)

@@ -36,6 +36,11 @@ def _variant(text, axis: str = "lon"):
             return tuple(names.index(n) for n in text[len("terms "):].split(", "))
         except ValueError:
             raise InputError(f"diagnosis.json: cannot read the variant {text!r}") from None
+    from ..diagnosis._catalogue import ACTUATOR_FILTERS, filter_text
+
+    for v in ACTUATOR_FILTERS:  # the members of actuator-dynamics' family in words
+        if v[0] not in ("lag", "delay") and filter_text(v) == text:
+            return v
     m = re.fullmatch(r"first-order lag, tau = ([-+0-9.eE]+) s", text)
     if m:
         return ("lag", float(m.group(1)))
@@ -54,13 +59,11 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
     flights cannot tell them apart); for a report without a set, the first effect with a
     near-tie runner-up, else the first effect and its runner-up; else the two best-ranked
     candidates."""
+    from ..diagnosis._confidence import rivals
+
     variants = {c["effect"]: c.get("variant") for c in diag.get("candidates", [])}
     axis = diag.get("axis", "lon")
-    firsts: list[str] = []
-    for x in diag.get("confidence_set") or []:
-        named = [e for e in x["explanation"] if e in variants]
-        if named and named[0] not in firsts:
-            firsts.append(named[0])
+    firsts = rivals(diag.get("confidence_set") or [], list(variants))
     if len(firsts) >= 2:
         return [(n, _variant(variants.get(n), axis)) for n in firsts[:2]]
     rows = diag.get("effects") or []
@@ -75,30 +78,73 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
 
 
 def control_map(model, axis: str, variant_of_control):
-    """`(t, u) -> model inputs`: the control (through the diagnosed lag or delay when the
+    """`(t, u) -> model inputs`: the control (through the diagnosed actuator filter when the
     model's first input is the acting deflection), the other inputs at zero."""
     import jax
     import jax.numpy as jnp
+    import numpy as np
 
     nu = len(model.inputs)
     shift = variant_of_control
 
+    def lag(u, dt, tau):
+        a = jnp.exp(-dt / tau)
+
+        def step(y, xs):
+            x0, x1 = xs
+            y = a * y + (1.0 - a) * 0.5 * (x0 + x1)
+            return y, y
+        _, ys = jax.lax.scan(step, u[0], (u[:-1], u[1:]))
+        return jnp.concatenate([u[:1], ys])
+
+    def stepped(u, dt, p, kind):
+        """The rate-limited or direction-dependent lag (`_catalogue.actuator_filter`)."""
+        xm = 0.5 * (u + jnp.concatenate([u[:1], u[:-1]]))
+        if kind == "rate-limit":
+            k, lim = 1.0 - jnp.exp(-dt / p[0]), p[1] * dt
+
+            def step(y, x):
+                y = y + jnp.clip(k * (x - y), -lim, lim)
+                return y, y
+        else:
+            ku, kd = 1.0 - jnp.exp(-dt / p[0]), 1.0 - jnp.exp(-dt / p[1])
+
+            def step(y, x):
+                y = y + jnp.where(x > y, ku, kd) * (x - y)
+                return y, y
+        _, ys = jax.lax.scan(step, u[0], xm)
+        return ys
+
+    def second_order(u, dt, fn, zeta):
+        from scipy.signal import bilinear, lfilter_zi
+
+        wn = 2 * np.pi * fn
+        b, a = bilinear([wn * wn], [1.0, 2.0 * zeta * wn, wn * wn], fs=1.0 / dt)
+        zi = lfilter_zi(b, a)
+
+        def step(z, x):  # transposed direct form II, as scipy's lfilter
+            y = b[0] * x + z[0]
+            z = jnp.stack([b[1] * x + z[1] - a[1] * y, b[2] * x - a[2] * y])
+            return z, y
+        _, ys = jax.lax.scan(step, jnp.asarray(zi) * u[0], u)
+        return ys
+
     def inputs(t, u):
         x = u
         if shift is not None:
-            kind, tau = shift
+            kind, *p = shift
             dt = float(t[1] - t[0])
+            tt = jnp.asarray(t)
             if kind == "delay":
-                x = jnp.interp(jnp.asarray(t) - tau, jnp.asarray(t), u)
+                x = jnp.interp(tt - p[0], tt, u)
+            elif kind == "lag":
+                x = lag(u, dt, p[0])
+            elif kind == "lag-delay":
+                x = lag(jnp.interp(tt - p[1], tt, u), dt, p[0])
+            elif kind == "second-order":
+                x = second_order(u, dt, *p)
             else:
-                a = jnp.exp(-dt / tau)
-
-                def step(y, xs):
-                    x0, x1 = xs
-                    y = a * y + (1.0 - a) * 0.5 * (x0 + x1)
-                    return y, y
-                _, ys = jax.lax.scan(step, u[0], (u[:-1], u[1:]))
-                x = jnp.concatenate([u[:1], ys])
+                x = stepped(u, dt, p, kind)
         return jnp.zeros((u.shape[0], nu)).at[:, 0].set(x)
     return inputs
 

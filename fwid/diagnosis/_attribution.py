@@ -30,7 +30,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._catalogue import CATALOGUE, Effect, base_columns
+from ._catalogue import CATALOGUE, Effect, axis_of, base_columns
 from ._regression import (Projector, error, harmonic_series, local_design, normal_equations,
                           residual, solve)
 from ._signals import Signals
@@ -86,6 +86,17 @@ def acting(model: Model, channel) -> Model:
     return tuple((e, unwrap(v)) for e, v in model if e.band == band and acts_on(v, load))
 
 
+#: Costs within this relative distance of the least are a tie (`simplest_best`): members that
+#: act identically on the data differ only by rounding.
+TIE_RTOL = 1e-9
+
+
+def simplest_best(costs) -> int:
+    """Index of the least of `costs`, the first of those that tie with it (`TIE_RTOL`)."""
+    least = min(costs)
+    return next(k for k, c in enumerate(costs) if c <= least + TIE_RTOL * abs(least))
+
+
 class Engine:
     """Fits the baseline plus any model of `catalogue` effects to the `loads` of some units and
     scores it on others. Designs, units' normal equations and fits are cached, so forward selection
@@ -103,6 +114,7 @@ class Engine:
         self._fits: dict = {}
         self._normal: dict = {}
         self._loo: dict = {}
+        self._acting: dict = {}
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]
@@ -138,11 +150,14 @@ class Engine:
             h, dh = self.series(i, load) if model else (None, None)
             extra = []
             for e, v in model:
-                cols = e.columns(s, load, v, h, dh)
-                if e.replaces_input:  # the control is the last base column
-                    g = np.concatenate([g[:, :-1], cols], axis=1)
+                if e.replaces_input:  # the control is the last base column; the acting
+                    # deflection is the same for every load of the axis: made once
+                    key_in = (i, e.name, v, axis_of(load))
+                    if key_in not in self._acting:
+                        self._acting[key_in] = e.columns(s, load, v, h, dh)
+                    g = np.concatenate([g[:, :-1], self._acting[key_in]], axis=1)
                 else:
-                    extra.append(cols)
+                    extra.append(e.columns(s, load, v, h, dh))
             self._design[key] = np.concatenate([g] + extra, axis=1) if extra else g
         return self._design[key]
 
@@ -187,17 +202,19 @@ class Engine:
         """The variant of `effect` (added to `model`) with the least training error on units
         `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's); for
         an effect whose variants differ in size (`Effect.sized`), the least
-        leave-one-unit-out error instead (with fewer than three units, the training error)."""
+        leave-one-unit-out error instead (with fewer than three units, the training error).
+        Of members that tie, the first (the variants are listed simplest first): a rate limit
+        that never binds is a plain lag, and must not be reported as a rate limit."""
         if len(effect.variants) == 1:
             return effect.variants[0]
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         if effect.sized and len(idx) >= 3:
             costs = [sum(self.loo_error(idx, ch, model + ((effect, v),)) / sigma2[ch]
                          for ch in chans) for v in effect.variants]
-            return effect.variants[int(np.argmin(costs))]
-        costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
-                     for ch in chans) for v in effect.variants]
-        return effect.variants[int(np.argmin(costs))]
+        else:
+            costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
+                         for ch in chans) for v in effect.variants]
+        return effect.variants[simplest_best(costs)]
 
     def choose(self, idx, model: Model, effect: Effect, sigma2: dict) -> OnLoads:
         """`effect`'s variant (`best_variant`) and the loads it acts on: those of its band

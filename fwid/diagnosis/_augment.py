@@ -4,9 +4,9 @@ measured where a user sees it, in the simulated states.
 
 Each effect of the verdict becomes terms of the cycle-averaged model:
 
-- `actuator-dynamics` and `time-offset`: the acting deflection, the measured one through the
-  diagnosed lag or delay (a lead for `time-offset`), replaces it as the model's input
-  (`d_eff`, a prepared column; the time constant is the diagnosis's, the control derivative
+- `actuator-dynamics` and `time-offset`: the acting deflection, the cycle-averaged measured
+  one through the diagnosed filter (a lead for `time-offset`), replaces it as the model's
+  input (`d_eff`, a prepared column; the filter is the diagnosis's, the control derivative
   is re-estimated);
 - `unsteady-aero`: the lagging part `lag(x) - x` of the axis's measured states (the
   diagnosed time constant; prepared columns `u_lag`, ...) as extra inputs, with a derivative
@@ -32,13 +32,15 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
 from ..data import Flight
+from ..decomposition import decompose
 from ..identification import get_model
 from ..models import GreyBoxModel
-from ._catalogue import frequency_deviation, lagged, lagging_part
+from ._catalogue import actuator_filter, filter_text, frequency_deviation, lagging_part
 from ._probes import ATTITUDE, elapsed
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
 
@@ -47,16 +49,56 @@ IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
           "lon-lat-coupling", "nonlinear-aero", "attitude", "drift")
 
 
-def _quadratic_terms(axis: str) -> list[tuple[str, Callable]]:
-    xs = AXIS_STATES[axis]
+def _quadratic_terms(axis: str, state_index: dict[str, int]) -> list[tuple[str, str, tuple]]:
+    """`nonlinear-aero`'s terms as `Term`s, in `_catalogue.quadratic_names` order."""
+    xs = [state_index[s] for s in AXIS_STATES[axis]]
+    names = AXIS_STATES[axis]
     out = []
-    for i, a in enumerate(xs):
-        out.append((f"{a}{a}", lambda s, i=i: s[i] * s[i]))
-        out.append((f"{a}|{a}|", lambda s, i=i: s[i] * jnp.abs(s[i])))
+    for i, a in enumerate(names):
+        out.append((f"_{a}{a}", "square", (xs[i],)))
+        out.append((f"_{a}|{a}|", "abs", (xs[i],)))
     for i in range(len(xs)):
         for j in range(i + 1, len(xs)):
-            out.append((f"{xs[i]}{xs[j]}", lambda s, i=i, j=j: s[i] * s[j]))
+            out.append((f"_{names[i]}{names[j]}", "cross", (xs[i], xs[j])))
     return out
+
+
+def _term(kind: str, idx: tuple, x, ue):
+    """One extra-load term: the extra input `ue[idx[0]]` (`"input"`), the state `x[idx[0]]`
+    (`"state"`), its square, `x |x|` (`"abs"`) or the product `x[i] x[j]` (`"cross"`)."""
+    if kind == "input":
+        return ue[idx[0]]
+    if kind == "state":
+        return x[idx[0]]
+    if kind == "square":
+        return x[idx[0]] * x[idx[0]]
+    if kind == "abs":
+        return x[idx[0]] * jnp.abs(x[idx[0]])
+    return x[idx[0]] * x[idx[1]]
+
+
+class Augmented(eqx.Module):
+    """The augmented model's state equation (`rates=True`: Eqs. 7-8 with the extra loads
+    entering as the aerodynamic ones do) or its loads (`rates=False`): `base(x, u[:1], p, c)`
+    plus, on each of the axis's loads `ld`, the sum over `terms` (`(suffix, kind, indices)`,
+    see `_term`) of `p[ld + suffix]` times the term, the extra inputs being `u[1:]`.
+
+    A module of static fields rather than a closure, so that the estimator's program for the
+    augmented model is kept across processes like the baseline's (`fwid.estimate`'s
+    exported-program cache describes it field by field)."""
+
+    base: Callable = eqx.field(static=True)
+    axis: str = eqx.field(static=True)
+    terms: tuple[tuple[str, str, tuple[int, ...]], ...] = eqx.field(static=True)
+    rates: bool = eqx.field(static=True)
+
+    def __call__(self, x, u, p, c):
+        ue = u[1:]
+        extra = [sum((p[f"{ld}{suffix}"] * _term(kind, idx, x, ue)
+                      for suffix, kind, idx in self.terms), 0.0 * x[0])
+                 for ld in AXIS_LOADS[self.axis]]
+        out = self.base(x, u[:1], p, c)
+        return out + (_load_rates(self.axis, extra, c) if self.rates else jnp.stack(extra))
 
 
 def _load_rates(axis: str, dF, c):
@@ -78,12 +120,11 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     ctrl, out = AXIS_INPUT[axis], {}
     for name, variant in effects:
         if name == "actuator-dynamics":
-            kind, tau = variant
-            out[f"{ctrl}_eff"] = (f"{ctrl} minus its trim through a first-order lag, tau = "
-                                  f"{tau:g} s" if kind == "lag" else
-                                  f"{ctrl} minus its trim, delayed {tau:g} s")
+            out[f"{ctrl}_eff"] = (f"cycle-averaged {ctrl} minus its trim through a "
+                                  f"{filter_text(variant)}")
         elif name == "time-offset":
-            out[f"{ctrl}_eff"] = f"{ctrl} minus its trim, shifted {float(variant):g} s earlier"
+            out[f"{ctrl}_eff"] = (f"cycle-averaged {ctrl} minus its trim, shifted "
+                                  f"{float(variant):g} s earlier")
         elif name == "unsteady-aero":
             for s in AXIS_STATES[axis]:
                 out[f"{s}_lag"] = (f"lag({s}) - {s}: {s} through a first-order lag of tau = "
@@ -98,10 +139,16 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     return out
 
 
-def augment(axis: str, effects: Sequence[tuple[str, object]]
+def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.0
             ) -> tuple[GreyBoxModel, Callable[[Flight], Flight], list[str]]:
     """The `axis` model (`fwid.longitudinal`/`fwid.lateral`) with `effects` (`(name,
     variant)` pairs as the diagnosis selected them) inside its EOM.
+
+    The acting deflection is the cycle-averaged measured one (below `cutoff` Hz, as the
+    diagnosis fitted the filter on the loads) through the chosen filter: a rate limit or a
+    direction-dependent lag is not linear, so it must see the same signal in both places
+    (the flapping ripple of the raw column would saturate a rate limit that the
+    cycle-averaged deflection never reaches).
 
     **Returns:** `(model, prepare, left_out)`: `prepare(flight)` adds the columns the model
     reads (the acting deflection), `left_out` the effects that have no cycle-averaged form.
@@ -113,7 +160,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
     control = ctrl
     shift = None  # (kind, tau) applied to the control column
     extra_inputs: list[str] = []
-    terms: list[tuple[str, Callable]] = []  # (suffix, g(x, u_extra)) per own load
+    terms: list[tuple[str, str, tuple]] = []  # (suffix, kind, indices) per own load (`_term`)
     left_out = []
     columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
 
@@ -122,7 +169,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
         extra_inputs.append(name)
         if column is not None:
             columns[name] = column
-        terms.append((name, lambda x, ue, j=j: ue[j]))
+        terms.append((name, "input", (j,)))
 
     for name, variant in effects:
         if name in ("actuator-dynamics", "time-offset"):
@@ -143,32 +190,21 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
             for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
                 add_input(s, None)
         elif name == "nonlinear-aero":
-            xs_idx = [state_index[s] for s in AXIS_STATES[axis]]
-            chosen = _quadratic_terms(axis)
+            chosen = _quadratic_terms(axis, state_index)
             if variant is not None:  # a subset of the terms (`_catalogue.QUADRATIC_SUBSETS`)
                 chosen = [chosen[k] for k in variant]
-            for suffix, g in chosen:
-                terms.append((f"_{suffix}", lambda x, ue, g=g: g(x[jnp.array(xs_idx)])))
+            terms.extend(chosen)
         elif name == "drift":
             add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))
             add_input("time2", lambda fl: elapsed(np.asarray(fl.t, dtype=float)) ** 2)
         elif name == "attitude":
             k = state_index[ATTITUDE[axis]]
-            terms.append((ATTITUDE[axis], lambda x, ue, k=k: x[k]))
+            terms.append((ATTITUDE[axis], "state", (k,)))
         else:
             left_out.append(name)
-    new = [f"{ld}{suffix}" for suffix, _ in terms for ld in loads]
-
-    def extra_loads(x, u, p):
-        ue = u[1:]
-        return [sum((p[f"{ld}{suffix}"] * g(x, ue) for suffix, g in terms), 0.0 * x[0])
-                for ld in loads]
-
-    def f(x, u, p, c):
-        return base.f(x, u[:1], p, c) + _load_rates(axis, extra_loads(x, u, p), c)
-
-    def forces(x, u, p, c):
-        return base.forces(x, u[:1], p, c) + jnp.stack(extra_loads(x, u, p))
+    new = [f"{ld}{suffix}" for suffix, _, _ in terms for ld in loads]
+    f = Augmented(base.f, axis, tuple(terms), rates=True)
+    forces = Augmented(base.forces, axis, tuple(terms), rates=False)
 
     params = {k: float(v) for k, v in base.params.items()}
     params.update({k: 0.0 for k in new})
@@ -183,8 +219,8 @@ def augment(axis: str, effects: Sequence[tuple[str, object]]
         new = {k: g(flight) for k, g in columns.items()}
         if shift is not None:
             d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
-            kind, tau = shift
-            new[control] = lagged(d, flight.dt, kind, tau)
+            slow = np.asarray(decompose({ctrl: d}, flight.dt, split_cutoff=cutoff).averaged[ctrl])
+            new[control] = actuator_filter(slow, flight.dt, shift)
         return flight.with_columns(**new) if new else flight
 
     return model, prepare, left_out

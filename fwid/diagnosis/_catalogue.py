@@ -16,10 +16,12 @@ is the generic first term of its physical family.
   fit, and the whole group wins only when it predicts flights it was not fitted to.
 - `lon-lat-coupling`: the other axis's states and control drive the load (Eqs. 2 and 5 with
   the cross terms the paper leaves out).
-- `actuator-dynamics`: the deflection that acts is the measured one through a first-order lag
-  or a pure delay: `d_eff` replaces `d` in the load's own model (no new coefficient, the
-  control derivative acts on `d_eff`), with the time constant chosen from `LAGS` by the
-  training fit. One free number only, so it cannot soak up unrelated misfit.
+- `actuator-dynamics`: the deflection that acts is the measured one through a causal filter:
+  `d_eff` replaces `d` in the load's own model (no new coefficient, the control derivative
+  acts on `d_eff`). A family (`ACTUATOR_FILTERS`): a first-order lag, a pure delay, both, a
+  second-order servo, a rate limit, a direction-dependent lag, each of one or two numbers
+  from a grid, the member chosen by leave-one-flight-out error on the fitting flights, as
+  `nonlinear-aero`'s size. One column only, so it cannot soak up unrelated misfit.
 - `unsteady-aero`: part of the state-dependent loads follows the states late (a lagging
   wake, Wagner/Kuessner-like): the lagging part `lag(x) - x` of the axis's states through a
   first-order lag of time constant from `LAGS`, one coefficient per state. A load is never
@@ -50,7 +52,7 @@ import dataclasses
 from collections.abc import Callable
 
 import numpy as np
-from scipy.signal import lfilter, lfilter_zi
+from scipy.signal import bilinear, lfilter, lfilter_zi
 
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, Signals, other
 
@@ -138,10 +140,79 @@ def lagged(x: np.ndarray, dt: float, kind: str, tau: float) -> np.ndarray:
     return y
 
 
+def actuator_filter(x: np.ndarray, dt: float, variant: tuple) -> np.ndarray:
+    """`x` through the causal filter `variant` (a member of `ACTUATOR_FILTERS`: its kind,
+    then its parameters); steady before the first sample.
+
+    - `("lag", tau)`, `("delay", T)`: as `lagged`;
+    - `("lag-delay", tau, T)`: delayed by `T`, then a first-order lag `tau`;
+    - `("second-order", fn, zeta)`: `y'' = wn^2 (x - y) - 2 zeta wn y'`, `wn = 2 pi fn`
+      (bilinear transform);
+    - `("rate-limit", tau, rmax)`: a first-order lag whose rate is clipped to `rmax` [/s];
+      these two step exactly from the midpoint of each sample interval, as `lagged`;
+    - `("asymmetric", tau_up, tau_down)`: a first-order lag with `tau_up` while the input is
+      above the output, `tau_down` otherwise.
+    """
+    kind, *p = variant
+    if kind in ("lag", "delay"):
+        return lagged(x, dt, kind, p[0])
+    if kind == "lag-delay":
+        return lagged(lagged(x, dt, "delay", p[1]), dt, "lag", p[0])
+    if kind == "second-order":
+        wn = 2.0 * np.pi * p[0]
+        b, a = bilinear([wn * wn], [1.0, 2.0 * p[1] * wn, wn * wn], fs=1.0 / dt)
+        y, _ = lfilter(b, a, x, zi=lfilter_zi(b, a) * x[0])
+        return y
+    if kind in ("rate-limit", "asymmetric"):  # stepped sample by sample, on Python floats
+        if kind == "rate-limit":
+            k, step = 1.0 - np.exp(-dt / p[0]), p[1] * dt
+
+            def gain(e):
+                return min(max(k * e, -step), step)
+        else:
+            ku, kd = 1.0 - np.exp(-dt / p[0]), 1.0 - np.exp(-dt / p[1])
+
+            def gain(e):
+                return (ku if e > 0.0 else kd) * e
+        xm = (0.5 * (x + np.concatenate([x[:1], x[:-1]]))).tolist()  # the steps' midpoints
+        out, prev = [], float(x[0])
+        for xi in xm:
+            prev += gain(xi - prev)
+            out.append(prev)
+        return np.asarray(out)
+    raise ValueError(f"unknown actuator filter {variant!r}")
+
+
+#: `actuator-dynamics`' members: causal filters of the measured deflection of one or two
+#: parameters each (`actuator_filter`), the member chosen by leave-one-flight-out error on the
+#: fitting flights (`Effect.sized`), as `nonlinear-aero`'s subsets. The grids are generic
+#: (servo bandwidths of a few to tens of Hz, rates of a fraction to tens of rad/s), not a
+#: simulator's values.
+ACTUATOR_FILTERS = (
+    tuple(("lag", t) for t in LAGS) + tuple(("delay", t) for t in LAGS)
+    + tuple(("lag-delay", t, T) for t in (0.02, 0.05, 0.1) for T in (0.02, 0.05))
+    + tuple(("second-order", fn, z) for fn in (4.0, 8.0, 16.0) for z in (0.5, 0.8))
+    + tuple(("rate-limit", t, r) for t in (0.02, 0.05) for r in (1.0, 3.0, 10.0))
+    + tuple(("asymmetric", a, b) for a, b in ((0.02, 0.1), (0.1, 0.02), (0.03, 0.07),
+                                               (0.07, 0.03)))
+)
+
+
+def filter_text(variant: tuple) -> str:
+    """A member of `ACTUATOR_FILTERS` in words (`"first-order lag, tau = 0.05 s"`, ...)."""
+    kind, *p = variant
+    return {"lag": lambda: f"first-order lag, tau = {p[0]:g} s",
+            "delay": lambda: f"delay {p[0]:g} s",
+            "lag-delay": lambda: f"delay {p[1]:g} s and first-order lag, tau = {p[0]:g} s",
+            "second-order": lambda: f"second-order lag, {p[0]:g} Hz, damping {p[1]:g}",
+            "rate-limit": lambda: f"first-order lag, tau = {p[0]:g} s, rate limit {p[1]:g}/s",
+            "asymmetric": lambda: f"direction-dependent lag, tau = {p[0]:g} s rising, "
+                                  f"{p[1]:g} s falling"}[kind]()
+
+
 def _actuator(s, load, variant, h, dh):
-    kind, tau = variant
     d = _slow(s, AXIS_INPUT[axis_of(load)])
-    return lagged(d, s.dt, kind, tau)[:, None]
+    return actuator_filter(d, s.dt, variant)[:, None]
 
 
 def lagging_part(x: np.ndarray, dt: float, tau: float) -> np.ndarray:
@@ -204,9 +275,10 @@ class Effect:
     #: other axis's own states, attitude or control, which hardly move, its columns there
     #: would only fit what their noise hides from the baseline (`Engine.allowed`).
     crosses_axes: bool = False
-    #: Do its variants differ in size (subsets of a family of columns)? Then the variant is
-    #: chosen by leave-one-flight-out error on the fitting flights, not by training error,
-    #: which always prefers the largest (`Engine.best_variant`).
+    #: Is it a family whose members differ in size or form (subsets of a family of columns,
+    #: filters of several kinds)? Then the member is chosen by leave-one-flight-out error on
+    #: the fitting flights, not by training error, which prefers the largest or most
+    #: flexible (`Engine.best_variant`).
     sized: bool = False
 
 
@@ -235,11 +307,13 @@ CATALOGUE: tuple[Effect, ...] = (
     ),
     Effect(
         "actuator-dynamics",
-        "the acting deflection lags (first order) or trails (delay) the measured one",
+        "the acting deflection is the measured one through a causal filter (a lag, a delay, "
+        "both, a second-order servo, a rate limit, a direction-dependent lag)",
         "averaged",
         _actuator,
-        tuple(("lag", t) for t in LAGS) + tuple(("delay", t) for t in LAGS),
+        ACTUATOR_FILTERS,
         replaces_input=True,
+        sized=True,
     ),
     Effect(
         "unsteady-aero",

@@ -212,3 +212,29 @@ def sequential(engine: Engine, halves: Sequence[Half], first: dict[str, Evidence
         out.append((e, ev))
         models = [m + ((e, v),) for m, v in zip(models, ev.variants)]
     return out
+
+
+def rivals(rows: Sequence[dict], named: Sequence[str]) -> list[str]:
+    """The distinct first effects among `named` (the catalogue's) of the kept explanations
+    `rows` (`as_rows`, best first): two or more when the flights cannot tell catalogue
+    effects apart, the case a discriminating input is for (`fwid design --discriminate`)."""
+    out: list[str] = []
+    for row in rows:
+        first = next((e for e in row["explanation"] if e in named), None)
+        if first is not None and first not in out:
+            out.append(first)
+    return out
+
+
+def next_flight(rows: Sequence[dict], named: Sequence[str]) -> dict | None:
+    """When the kept explanations `rows` are led by different catalogue effects (`rivals`),
+    the flight that would tell the first two apart: `{"tell_apart": [X, Y], "how": ...}`
+    (`fwid design --discriminate`); `None` otherwise."""
+    pair = rivals(rows, named)[:2]
+    if len(pair) < 2:
+        return None
+    return {"tell_apart": pair,
+            "how": f"these flights cannot tell {pair[0]} from {pair[1]}: fly the input of "
+                   "`fwid design --discriminate DIAGNOSIS_DIR` (the manoeuvre over which the "
+                   "two augmented models' predictions differ most), then diagnose again with "
+                   "that flight among the test flights"}

@@ -10,14 +10,14 @@ import numpy as np
 
 from ..data import Flight
 from ._attribution import Engine, units, unwrap
-from ._catalogue import CATALOGUE, Effect, quadratic_names
-from ._confidence import LEVEL, as_rows, confidence_set, explanations, sequential
+from ._catalogue import CATALOGUE, Effect, filter_text, quadratic_names
+from ._confidence import LEVEL, as_rows, confidence_set, explanations, next_flight, sequential
 from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
 from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
 from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
-from ._simulation import SimulationGap, simulation_gap
+from ._simulation import SimulationGap, simulation_gap, start_baseline
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
@@ -76,6 +76,11 @@ class Diagnosis:
         raise KeyError(name)
 
     @property
+    def next_flight(self) -> dict | None:
+        """`_confidence.next_flight` of the set: the flight that tells its rivals apart."""
+        return next_flight(self.confidence_set, [c["effect"] for c in self.candidates])
+
+    @property
     def lead(self) -> dict | None:
         """The candidate behind the verdict: the effect named, the probe of an
         `"unexplained"` verdict, or `None`."""
@@ -94,6 +99,7 @@ class Diagnosis:
             "test": self.test,
             "candidates": self.candidates,
             "confidence_set": self.confidence_set,
+            "next_flight": self.next_flight,
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
@@ -116,8 +122,7 @@ def _variant_text(v, axis: str = "lon") -> str | None:
     if all(isinstance(k, int) for k in v):  # a subset of nonlinear-aero's terms
         names = quadratic_names(axis)
         return "terms " + ", ".join(names[k] for k in v)
-    kind, tau = v
-    return f"first-order lag, tau = {tau:g} s" if kind == "lag" else f"delay {tau:g} s"
+    return filter_text(v)
 
 
 #: A load is affected by an effect when its held-out gain is at least this share of the
@@ -234,6 +239,7 @@ def diagnose(
     tr_sig = [signals(f, cutoff=cutoff) for f in train]
     te_sig = [signals(f, cutoff=cutoff) for f in test]
     check_excitation(tr_sig, axis)
+    baseline = start_baseline(train, test, axis, cutoff) if simulation else None
     tr_blocks, tr_par = _blocks(tr_sig, 0)
     te_blocks, te_par = _blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
@@ -434,7 +440,7 @@ def diagnose(
     if simulation:
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
             + " fitted by output error on the training flights, simulated on the test flights")
-        sim = simulation_gap(train, test, axis, in_sim, cutoff)
+        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result())
 
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,

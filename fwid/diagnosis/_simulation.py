@@ -13,11 +13,13 @@ import dataclasses
 import math
 import warnings
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
 from .._errors import FitDivergedError
 from ..data import Flight
+from ..estimate import quiet_fits
 from ..identification import Identification, get_model, identify
 from ._augment import augment, prepared_inputs
 
@@ -41,20 +43,44 @@ def _rms_by_state(ident: Identification, states: Sequence[str]) -> dict:
         [(v.simulated[s] - v.measured[s]) ** 2 for v in ident.validation])))) for s in states}
 
 
+def fit_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
+                 cutoff: float = 5.0) -> Identification:
+    """The baseline (Eq. 7 or 8) fitted jointly on `train`, validated on `test`. It misses
+    the effect by design, so its fit warnings (coloured residuals, slow convergence) are
+    expected: kept in its fits (`FitResult.warnings`), not issued (`quiet_fits`, which also
+    holds when this runs in a worker thread beside the rest of the diagnosis)."""
+    with quiet_fits():
+        return identify(list(train), get_model(axis), validate=list(test), joint=True,
+                        cutoff=cutoff)
+
+
+def start_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
+                   cutoff: float = 5.0) -> Future:
+    """`fit_baseline` started in a worker thread: it does not depend on the verdict, and JAX
+    releases the interpreter while it computes, so it runs beside the diagnosis's selection
+    (NumPy's). The future's `result()` is `fit_baseline`'s, or raises its error."""
+    pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-baseline")
+    future = pool.submit(fit_baseline, train, test, axis, cutoff)
+    pool.shutdown(wait=False)  # the thread ends with the fit
+    return future
+
+
 def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
-                   effects: Sequence[tuple[str, object]], cutoff: float = 5.0) -> SimulationGap:
-    """Fit the baseline and the model augmented with `effects` (`(name, variant)` pairs) on
-    `train`, simulate both on `test`; `shrink_pct` is the drop of the RMS of the simulated
-    states, `100 (1 - sqrt(mean_s (after_s / before_s)^2))` over the states."""
+                   effects: Sequence[tuple[str, object]], cutoff: float = 5.0,
+                   baseline: Identification | None = None) -> SimulationGap:
+    """Fit the baseline (or take `baseline`, `fit_baseline`'s result) and the model augmented
+    with `effects` (`(name, variant)` pairs) on `train`, simulate both on `test`;
+    `shrink_pct` is the drop of the RMS of the simulated states,
+    `100 (1 - sqrt(mean_s (after_s / before_s)^2))` over the states."""
     base = get_model(axis)
     states = list(base.outputs)
-    model, prepare, left_out = augment(axis, effects)
+    model, prepare, left_out = augment(axis, effects, cutoff)
     in_eom = [n for n, _ in effects if n not in left_out]
-    # the baseline misses the effect, so its fit warns (coloured residuals, slow convergence):
-    # expected here, kept in the summary rather than printed
+    before_id = fit_baseline(train, test, axis, cutoff) if baseline is None else baseline
+    # the augmented model may still miss part of the effect, so its fit may warn (coloured
+    # residuals, slow convergence): expected here, kept in the summary rather than printed
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        before_id = identify(list(train), base, validate=list(test), joint=True, cutoff=cutoff)
         after_id, failed = None, None
         if in_eom:  # from the baseline's estimates, the new terms at zero: the quadratic
             # terms' equation-error start can make the simulation blow up
@@ -87,7 +113,9 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
         # or the augmented model's (the shrink may be understated)
         "converged_baseline": base_ok,
         "converged_augmented": augmented_ok,
-        "warnings": sorted({str(w.message).split(": ", 1)[-1] for w in caught}),
+        "warnings": sorted({str(w.message).split(": ", 1)[-1] for w in caught}
+                           | {m.split(": ", 1)[-1] for f in before_id.fits
+                              for m in f.warnings}),
         **({"message": failed} if failed else {}),
         "method": "baseline and augmented model fitted jointly on the training flights "
                   "(output-error ML, Eqs. 10-11), simulated on the test flights with their "

@@ -15,7 +15,7 @@ from ._uncertainty import (
     correlation as correlation,
 )
 from ._local import refit_local_affine as refit_local_affine
-from ._warnings import fit_warnings as fit_warnings
+from ._warnings import fit_warnings as fit_warnings, quiet_fits as quiet_fits
 from ._shooting import fit_shooting as fit_shooting
 from ._filter_error import (
     FilterErrorResult as FilterErrorResult,

@@ -10,6 +10,8 @@ uncertainty is not finite. [`fwid.fit`][] and [`fwid.fit_each`][] issue each as 
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import warnings
 from collections.abc import Sequence
 
@@ -147,7 +149,25 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
     return out
 
 
+#: Set (in this thread or task only) by `quiet_fits`.
+_QUIET: contextvars.ContextVar[bool] = contextvars.ContextVar("fwid_quiet_fits", default=False)
+
+
+@contextlib.contextmanager
+def quiet_fits():
+    """Inside, fits keep their warnings in `FitResult.warnings` without issuing them. Unlike
+    `warnings.catch_warnings`, which swaps process-wide state, it holds for the current
+    thread only: a fit run in a worker thread beside other work stays quiet alone."""
+    token = _QUIET.set(True)
+    try:
+        yield
+    finally:
+        _QUIET.reset(token)
+
+
 def issue(messages: Sequence[str], stacklevel: int = 3) -> None:
-    """Issue each message as a [`fwid.FitWarning`][]."""
+    """Issue each message as a [`fwid.FitWarning`][] (unless inside `quiet_fits`)."""
+    if _QUIET.get():
+        return
     for m in messages:
         warnings.warn(m, FitWarning, stacklevel=stacklevel)

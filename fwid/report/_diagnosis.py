@@ -67,9 +67,15 @@ def confidence_set_line(d: Diagnosis) -> str | None:
     names = ", or ".join(_explanation_text(x["explanation"]) for x in kept)
     detail = "; ".join(f"{_explanation_text(x['explanation'])} {x['gain_pct']:.1f} %, "
                        f"p = {x['p_value']:.2g}" for x in kept)
-    return (f"  {names}: these flights cannot tell them apart (the model confidence set of the "
+    line = (f"  {names}: these flights cannot tell them apart (the model confidence set of the "
             f"explanations at {100 * d.settings.get('confidence_level', 0.1):g} %; held-out "
             f"gain and p value: {detail})")
+    nxt = d.next_flight
+    if nxt is not None:
+        a, b = nxt["tell_apart"]
+        line += (f"\n  to tell {a} from {b}, fly the input of `fwid design --discriminate` on "
+                 "this diagnosis's folder next")
+    return line
 
 
 def diagnosis_summary(d: Diagnosis) -> str:

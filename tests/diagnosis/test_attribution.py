@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fwid.diagnosis._attribution import Engine, OnLoads, acting, units
-from fwid.diagnosis._catalogue import get_effect
+from fwid.diagnosis._attribution import Engine, OnLoads, acting, simplest_best, units
+from fwid.diagnosis._catalogue import actuator_filter, get_effect
 from fwid.diagnosis._signals import Signals
 
 
@@ -98,3 +98,33 @@ def test_an_effect_of_the_quiet_axis_is_kept_off_its_loads():
     # by default every load is the engine's own, and the quadratic term on M is found
     full = Engine(units(flights), ("X", "Z", "M"))
     assert full.choose(idx, (), nl, full.mean_square(idx)).loads == ("M",)
+
+
+def test_a_member_that_acts_as_a_simpler_one_is_not_chosen():
+    """A small deflection through a plain lag never reaches the rate limits of the family's
+    rate-limited lags, which then fit exactly as well as the lag: the lag (listed first) is
+    chosen, not a rate limit that the data never showed."""
+    rng = np.random.default_rng(5)
+    fls = []
+    for k in range(5):
+        fl = _flight(rng, k, quadratic_on_m=0.0)
+        de = 0.01 * fl.slow["de"]
+        fl.slow["de"] = de
+        assert np.max(np.abs(np.diff(de))) / fl.dt < 0.5  # below every rate limit in the grid
+        u, w, q = (fl.slow[s] for s in ("u", "w", "q"))
+        acting_de = actuator_filter(de, fl.dt, ("lag", 0.05))
+        for ld, (cu, cw, cq, cd) in {"X": (-0.3, 0.1, 0.0, 0.0), "Z": (0.0, -0.8, 0.2, -40.0),
+                                     "M": (0.0, -0.3, -0.5, 60.0)}.items():
+            fl.loads["averaged"][ld] = (cu * u + cw * w + cq * q + cd * acting_de
+                                        + 0.02 * rng.normal(size=fl.n))
+        fls.append(fl)
+    eng = Engine(units(fls), ("X", "Z", "M"))
+    e = get_effect("actuator-dynamics")
+    idx = tuple(range(5))
+    sigma2 = {ch: 1.0 for ch in eng.channels("averaged")}
+    costs = [sum(eng.loo_error(idx, ch, ((e, v),)) for ch in eng.channels("averaged"))
+             for v in e.variants]
+    ties = [v for v, c in zip(e.variants, costs) if np.isclose(c, min(costs), rtol=1e-9)]
+    assert ("lag", 0.05) in ties and any(v[0] == "rate-limit" for v in ties)
+    assert eng.best_variant(idx, (), e, sigma2) == ("lag", 0.05)
+    assert simplest_best([3.0, 1.0, 1.0 + 1e-12, 0.5 + 1e-10, 0.5]) == 3

@@ -66,6 +66,13 @@ def test_the_set_of_a_diagnosis(effect_flights):
                         dict(rows[0], explanation=["time-offset", "attitude"], p_value=0.3)]
     assert ("actuator-dynamics, or time-offset + attitude: these flights cannot tell them "
             "apart") in diagnosis_summary(d)
+    # two catalogue effects lead: the next flight is the one that tells them apart
+    assert d.to_json()["next_flight"]["tell_apart"] == ["actuator-dynamics", "time-offset"]
+    assert "fwid design --discriminate" in diagnosis_summary(d)
+    d.confidence_set = [dict(rows[0], explanation=["actuator-dynamics"]),
+                        dict(rows[0], explanation=["actuator-dynamics", "attitude"]),
+                        dict(rows[0], explanation=["attitude"])]  # a probe: no catalogue rival
+    assert d.next_flight is None and "--discriminate" not in diagnosis_summary(d)
 
 
 def test_clean_flights_leave_none_alone(effect_flights):

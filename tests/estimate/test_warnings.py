@@ -160,3 +160,34 @@ def test_least_squares_start_of_a_model_with_h_says_it_keeps_the_nominal_values(
     _, caught = _fit(model, z)  # start="least-squares", the default
     assert any(m.startswith("twice: the least-squares start keeps the nominal values of a, b")
                for m in caught), caught
+
+
+def test_quiet_fits_silences_its_own_thread_only():
+    """A fit run in a worker thread inside `quiet_fits` issues nothing, while the thread
+    beside it still warns (the diagnosis runs the baseline's fit so, next to its selection)."""
+    import threading
+
+    from fwid.estimate import quiet_fits
+    from fwid.estimate._warnings import issue
+
+    inside, go = threading.Event(), threading.Event()
+
+    def worker():
+        with quiet_fits():
+            inside.set()
+            go.wait(5)
+            issue(["worker: quiet"])
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        t = threading.Thread(target=worker)
+        t.start()
+        inside.wait(5)
+        issue(["main: heard"])
+        go.set()
+        t.join(5)
+    assert [str(w.message) for w in caught] == ["main: heard"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        issue(["after: heard"])
+    assert len(caught) == 1

@@ -12,6 +12,10 @@ dynamics, is exactly the flight without the effect):
   `wn = 2 pi fn / s` (fn at strength 1), `zeta` fixed.
 - `rate-limit` (3): first-order lag whose rate saturates, `u_eff' = clip((u_cmd - u_eff) /
   tau, -rmax, rmax)`, `tau = s tau1`, `rmax = rmax1 / s` [rad/s].
+- `asymmetric` (4): a first-order lag whose time constant depends on the direction of travel
+  (a servo that is slower against the airload): `tau_up` while `u_cmd > u_eff`, `tau_down`
+  otherwise, both `s` times their value at strength 1.
+- `lag-delay` (5): a transport delay `T = s T1` followed by a first-order lag `tau = s tau1`.
 
 `time-offset` (in the catalogue since issue 16; `sensor-offset` is an alias): the true
 deflection acts at once, but the logged control columns `de`, `dr` (the whole measured
@@ -98,7 +102,24 @@ class RateLimit(Lag):
         return np.clip((u_cmd - u) / self.c["tau"], -r, r)
 
 
-ACTUATOR = (Lag, Delay, Servo, RateLimit)
+class Asymmetric(Lag):
+    effect, name = "actuator-dynamics", "asymmetric"
+    COEFFICIENTS = {"tau_up": 0.02, "tau_down": 0.08}
+
+    def aux_rhs(self, xc, u_cmd, u, aux):
+        up = u_cmd > u
+        return (u_cmd - u) / np.where(up, self.c["tau_up"], self.c["tau_down"])
+
+
+class LagDelay(Lag):
+    effect, name = "actuator-dynamics", "lag-delay"
+    COEFFICIENTS = {"tau": 0.04, "delay": 0.03}
+
+    def command(self, tq, t, u_cmd):
+        return _delayed(tq, t, u_cmd, self.c["delay"])
+
+
+ACTUATOR = (Lag, Delay, Servo, RateLimit, Asymmetric, LagDelay)
 
 
 class Trailing(Form):

@@ -1,0 +1,73 @@
+"""`actuator-dynamics` as a family of causal filters (`_catalogue.actuator_filter`), checked
+against continuous-time responses computed independently."""
+
+import numpy as np
+import pytest
+from scipy.signal import lsim
+
+from fwid.diagnosis._catalogue import (ACTUATOR_FILTERS, CATALOGUE, actuator_filter,
+                                       filter_text, get_effect)
+
+DT = 0.001
+T = np.arange(0.0, 0.6, DT)
+
+
+def _step(at=0.05, size=0.1):
+    return np.where(T >= at, size, 0.0)
+
+
+def test_second_order_matches_the_continuous_servo():
+    fn, zeta = 8.0, 0.5
+    wn = 2 * np.pi * fn
+    x = _step()
+    y = actuator_filter(x, DT, ("second-order", fn, zeta))
+    _, ref, _ = lsim(([wn * wn], [1.0, 2 * zeta * wn, wn * wn]), x, T)
+    assert np.max(np.abs(y - ref)) < 0.01 * 0.1 * 3  # the bilinear map is a step behind at most
+    assert y.max() > 0.11  # it overshoots (damping 0.5), as a first-order lag cannot
+
+
+def test_lag_and_delay_members_keep_their_shapes():
+    x = _step()
+    y = actuator_filter(x, DT, ("lag-delay", 0.04, 0.03))
+    t = T - 0.05 - 0.03
+    ref = np.where(t >= 0, 0.1 * (1 - np.exp(-np.maximum(t, 0) / 0.04)), 0.0)
+    assert np.max(np.abs(y - ref)) < 3e-3
+    assert np.all(y[T < 0.05 + 0.03 - DT] == 0.0)  # nothing acts before the delay
+
+
+def test_rate_limit_caps_the_slope_and_is_a_lag_below_it():
+    x = _step(size=0.2)
+    y = actuator_filter(x, DT, ("rate-limit", 0.02, 1.0))
+    assert np.max(np.diff(y)) <= 1.0 * DT + 1e-15
+    assert y[np.searchsorted(T, 0.15)] == pytest.approx(0.1, abs=2e-3)  # 1 rad/s for 0.1 s
+    fast = actuator_filter(x, DT, ("rate-limit", 0.02, 1e6))
+    t = np.maximum(T - 0.05, 0)
+    np.testing.assert_allclose(fast, np.where(T >= 0.05, 0.2 * (1 - np.exp(-t / 0.02)), 0.0),
+                               atol=0.2 * DT / 0.02)
+
+
+def test_asymmetric_lag_rises_and_falls_with_its_own_time_constants():
+    on, off = 50, 400
+    x = np.zeros_like(T)
+    x[on:off] = 0.1
+    y = actuator_filter(x, DT, ("asymmetric", 0.03, 0.08))
+    rise = y[on + 30] / 0.1
+    fall = y[off + 80] / y[off - 1]
+    assert rise == pytest.approx(1 - np.exp(-1), abs=0.02)
+    assert fall == pytest.approx(np.exp(-1), abs=0.02)
+    # the opposite member falls fast
+    z = actuator_filter(x, DT, ("asymmetric", 0.08, 0.03))
+    assert z[on + 30] < y[on + 30] and z[off + 30] / z[off - 1] < 0.4
+
+
+def test_actuator_family_is_chosen_by_held_out_error_and_every_member_runs():
+    e = get_effect("actuator-dynamics")
+    assert e.sized and e.replaces_input and e.variants == ACTUATOR_FILTERS
+    kinds = {v[0] for v in ACTUATOR_FILTERS}
+    assert kinds == {"lag", "delay", "lag-delay", "second-order", "rate-limit", "asymmetric"}
+    x = np.sin(2 * np.pi * 2 * T)
+    for v in ACTUATOR_FILTERS:
+        y = actuator_filter(x, DT, v)
+        assert y.shape == x.shape and np.all(np.isfinite(y)), v
+        assert filter_text(v)
+    assert sum(c.sized for c in CATALOGUE) == 2
