@@ -22,7 +22,7 @@ from ._loads import body_states, rigid_body_loads
 from ._model import phase_of
 from ._raw import MAX_DROPOUT, RawTake
 from ._read import raw_files, read_raw
-from ._smoother import smooth_batch
+from ._smoother import _fns, smooth_batch
 from ._workers import Failed, run_all, start
 
 #: The section-1 columns written, in order (extras follow).
@@ -222,7 +222,8 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     say = progress or (lambda msg: None)
     failures, ok = {}, []
     read = run_all(read_raw, [((f,), {"body": body, "frame": frame, "onboard": onboard,
-                                      "max_dropout": max_dropout}) for f in files], pool)
+                                      "max_dropout": max_dropout}) for f in files], pool,
+                   meanwhile=_fns)  # JAX imported and the smoother's programs made meanwhile
     for f, take in zip(files, read):
         try:
             if isinstance(take, Failed):

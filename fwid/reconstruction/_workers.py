@@ -77,10 +77,16 @@ def _guarded(task):
         return Failed(str(e))
 
 
-def run_all(fn, tasks, pool=None) -> list:
+def run_all(fn, tasks, pool=None, meanwhile=None) -> list:
     """`fn(*args, **kwargs)` for each `(args, kwargs)` of `tasks`, in order, on the pool's
-    workers (or here without one); a task's `fwid.FwidError` is returned as a `Failed`."""
+    workers (or here without one); a task's `fwid.FwidError` is returned as a `Failed`.
+    `meanwhile()`, if given, runs here while the workers work."""
     jobs = [(fn, tuple(a), dict(k)) for a, k in tasks]
     if pool is None or len(jobs) < 2:
+        if meanwhile is not None:
+            meanwhile()
         return [_guarded(j) for j in jobs]
-    return list(pool.map(_guarded, jobs))
+    results = pool.map(_guarded, jobs)  # submitted now
+    if meanwhile is not None:
+        meanwhile()
+    return list(results)
