@@ -2,7 +2,8 @@
 
 Takes of one sample step are smoothed together (vmapped), padded to one length (a multiple
 of `BUCKET` samples, unmeasured after each take's end); a take that fails is reported and
-left out while the others go on.
+left out while the others go on. Reading the takes and aligning their clocks run one take
+per task on worker processes where there are several cores and takes (`_workers.py`).
 """
 
 from __future__ import annotations
