@@ -224,7 +224,7 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     failures, ok = {}, []
     read = run_all(read_raw, [((f,), {"body": body, "frame": frame, "onboard": onboard,
                                       "max_dropout": max_dropout}) for f in files], pool,
-                   meanwhile=_fns)  # JAX imported and the smoother's programs made meanwhile
+                   meanwhile=_fns)  # on workers: JAX imported and the programs made meanwhile
     for f, take in zip(files, read):
         try:
             if isinstance(take, Failed):

@@ -80,11 +80,9 @@ def _guarded(task):
 def run_all(fn, tasks, pool=None, meanwhile=None) -> list:
     """`fn(*args, **kwargs)` for each `(args, kwargs)` of `tasks`, in order, on the pool's
     workers (or here without one); a task's `fwid.FwidError` is returned as a `Failed`.
-    `meanwhile()`, if given, runs here while the workers work."""
+    `meanwhile()`, if given, runs here while the workers work (not at all without them)."""
     jobs = [(fn, tuple(a), dict(k)) for a, k in tasks]
     if pool is None or len(jobs) < 2:
-        if meanwhile is not None:
-            meanwhile()
         return [_guarded(j) for j in jobs]
     results = pool.map(_guarded, jobs)  # submitted now
     if meanwhile is not None:

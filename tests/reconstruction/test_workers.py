@@ -31,6 +31,9 @@ def test_run_all_keeps_order_and_returns_errors(tmp_path):
         out = _workers.run_all(read_raw, [((p,), {"body": "DelFly"}) for p in paths], pool,
                                meanwhile=lambda: ran.append(1))
     assert ran == [1]
+    assert _workers.run_all(read_raw, [((good[0],), {"body": "DelFly"})],
+                            meanwhile=lambda: ran.append(2))[0].name == "g0"
+    assert ran == [1]  # nothing meanwhile without workers
     assert isinstance(out[1], _workers.Failed) and "missing.csv: no such file" in out[1].message
     for p, take in zip(good, (out[0], out[2])):
         ref = read_raw(p, body="DelFly")
