@@ -16,21 +16,38 @@ def reconstruct(args) -> int:
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: exists and is not a folder; give --out a folder")
     import fwid
+    from fwid.reconstruction import raw_files
+    from fwid.reconstruction._workers import FIGURES, SCIPY, run_all, start
 
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
-    result = fwid.reconstruct(args.raw, body=args.body, frame=args.frame, onboard=args.onboard,
-                              clock_offset=args.clock_offset, max_dropout=args.max_dropout,
-                              min_overlap=args.min_overlap, progress=say)
-    written = fwid.write_reconstruction(result, out) if result.flights else []
-    if result.flights and args.figures:
-        from fwid.report import plot_reconstruction
-
-        fig = None  # one figure, redrawn take after take
-        for fl in result.flights:
-            fig = plot_reconstruction(fl, path=out / f"{fl.name}.reconstruction.png", figure=fig)
+    # worker processes for the per-take work (reading, clocks, writing, figures)
+    pool = start(len(raw_files(args.raw)), preload=SCIPY + (FIGURES if args.figures else ()))
+    try:
+        result = fwid.reconstruct(args.raw, body=args.body, frame=args.frame,
+                                  onboard=args.onboard, clock_offset=args.clock_offset,
+                                  max_dropout=args.max_dropout, min_overlap=args.min_overlap,
+                                  progress=say, pool=pool)
+        written = fwid.write_reconstruction(result, out, pool=pool) if result.flights else []
+        if result.flights and args.figures:
+            run_all(figure_file, [((fl, out / f"{fl.name}.reconstruction.png"), {})
+                                  for fl in result.flights], pool)
+    finally:
+        if pool is not None:
+            pool.shutdown()
     n = len(result.flights)
     print(f"fwid: reconstructed {n} of {n + len(result.failures)} takes into {out}/ "
           f"({len(written)} files, {time.perf_counter() - t0:.1f} s)")
     for path, msg in result.failures:
         print(f"fwid: error: {msg}", file=sys.stderr)
     return 2 if result.failures else 0
+
+
+_FIGURE = {}
+
+
+def figure_file(flight, path) -> None:
+    """Draw a take's figure into `path`, redrawing this process's last figure (one
+    `matplotlib` figure per process, reused take after take)."""
+    from fwid.report import plot_reconstruction
+
+    _FIGURE["fig"] = plot_reconstruction(flight, path=path, figure=_FIGURE.get("fig"))

@@ -15,7 +15,8 @@ autopilot logs to the section-1 flights every other stage reads.
   take's time base without aliasing (`_clock.py`).
 - States and loads from the full nonlinear rigid-body equations (`_loads.py`); the frame
   check and residuals (`_checks.py`); the pipeline, [`fwid.reconstruct`][] (`_pipeline.py`);
-  writing the flights and `reconstruction.json` atomically (`_write.py`).
+  writing the flights and `reconstruction.json` atomically (`_write.py`); the per-take work
+  (reading, clocks, writing, figures) on worker processes, one per core (`_workers.py`).
 
 `reconstruction.json` holds `{"flights": [entry, ..]}`, one entry per flight:
 

@@ -2,7 +2,8 @@
 
 Takes of one sample step are smoothed together (vmapped), padded to one length (a multiple
 of `BUCKET` samples, unmeasured after each take's end); a take that fails is reported and
-left out while the others go on.
+left out while the others go on. Reading the takes and aligning their clocks run one take
+per task on worker processes where there are several cores and takes (`_workers.py`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ from ._loads import body_states, rigid_body_loads
 from ._model import phase_of
 from ._raw import MAX_DROPOUT, RawTake
 from ._read import raw_files, read_raw
-from ._smoother import smooth_batch
+from ._smoother import _fns, smooth_batch
+from ._workers import Failed, run_all, start
 
 #: The section-1 columns written, in order (extras follow).
 COLUMNS = ("t", "u", "v", "w", "p", "q", "r", "phi", "theta", "psi", "de", "dr", "f",
@@ -161,7 +163,8 @@ def _cut(take: RawTake, clock, min_overlap):
 
 def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onboard=None,
                 clock_offset: float | None = None, max_dropout: float = MAX_DROPOUT,
-                min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None) -> Reconstruction:
+                min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None,
+                processes: int | None = None, pool=None) -> Reconstruction:
     """Raw takes to section-1 flights (CONTRACTS section 5), smoothed and with their loads.
 
     The states come from the smoother, the loads from the full nonlinear rigid-body
@@ -174,7 +177,10 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
       of finding it from the gyro;
     - `min_overlap`: the shortest overlap (s) of take and log accepted;
     - `vehicle`: a `vehicle.json` path or its dict (default: the one beside each take);
-    - `progress`: called with a one-line message per take.
+    - `progress`: called with a one-line message per take;
+    - `processes`: worker processes for the per-take work (reading, clock alignment; default
+      one per core from 4 takes on, 0: none); `pool`: a pool of them to use instead
+      (`fwid.reconstruction._workers.start`), left running.
 
     **Returns:** a `fwid.reconstruction.Reconstruction`: `flights` (each a
     `ReconstructedFlight`: `columns`, `entry` of `reconstruction.json`, ...) and `failures`
@@ -183,11 +189,46 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     files = raw_files(paths)
     if onboard is not None and len(files) > 1:
         raise InputError(f"--onboard names the log of one take, but {len(files)} takes were given")
+    own = pool is None
+    pool = start(len(files), processes) if own else pool
+    try:
+        return _reconstruct(files, pool, body=body, frame=frame, onboard=onboard,
+                            clock_offset=clock_offset, max_dropout=max_dropout,
+                            min_overlap=min_overlap, vehicle=vehicle, progress=progress)
+    finally:
+        if own and pool is not None:
+            pool.shutdown()
+
+
+def _align(take: RawTake, w, clock_offset, min_overlap):
+    """The clock offset of a take with an autopilot log (from the body rates `w` smoothed
+    without the gyro), the take's samples the log covers and the log's signals there."""
+    log = take.onboard
+    gyro = np.stack([log.columns[c] for c in "pqr"], 1)
+    clock = find_offset(take.t, w, log.t, gyro, float(np.median(log.columns["f"])),
+                        given=clock_offset, min_overlap=min_overlap)
+    if clock is None:
+        at = ("any clock offset" if clock_offset is None
+              else f"the clock offset {clock_offset:g} s given")
+        raise FlightDataError(
+            f"{take.path}: take and autopilot log {log.path} overlap by less than "
+            f"{min_overlap:g} s at {at}; give the log of this take"
+            + ("" if clock_offset is None else " or the right --clock-offset"))
+    s, cols = _cut(take, clock, min_overlap)
+    return s, cols, clock
+
+
+def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout, min_overlap,
+                 vehicle, progress) -> Reconstruction:
     say = progress or (lambda msg: None)
     failures, ok = {}, []
-    for f in files:
+    read = run_all(read_raw, [((f,), {"body": body, "frame": frame, "onboard": onboard,
+                                      "max_dropout": max_dropout}) for f in files], pool,
+                   meanwhile=_fns)  # on workers: JAX imported and the programs made meanwhile
+    for f, take in zip(files, read):
         try:
-            take = read_raw(f, body=body, frame=frame, onboard=onboard, max_dropout=max_dropout)
+            if isinstance(take, Failed):
+                raise FlightDataError(take.message)
             ok.append((f, take, *_vehicle(f, vehicle)))
         except FwidError as e:
             failures[str(f)] = str(e)
@@ -199,28 +240,19 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     # one pass where the gyro's pass follows (it starts from this one's attitude), else two
     att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
                      passes=[1 if t.onboard is not None else 2 for t in takes])
+    logged = [i for i, t in enumerate(takes) if t.onboard is not None]
+    aligned = dict(zip(logged, run_all(_align, [((takes[i], att0[i].w, clock_offset, min_overlap),
+                                                  {}) for i in logged], pool)))
     flights, stage = [None] * len(ok), []
     for i, (f, take, veh, vpath) in enumerate(ok):
-        try:
-            if take.onboard is None:
-                stage.append((i, slice(None), dict(take.controls), None, att0[i]))
-                continue
-            log = take.onboard
-            gyro = np.stack([log.columns[c] for c in "pqr"], 1)
-            clock = find_offset(take.t, att0[i].w, log.t, gyro, float(np.median(log.columns["f"])),
-                                given=clock_offset, min_overlap=min_overlap)
-            if clock is None:
-                at = ("any clock offset" if clock_offset is None
-                      else f"the clock offset {clock_offset:g} s given")
-                raise FlightDataError(
-                    f"{take.path}: take and autopilot log {log.path} overlap by less than "
-                    f"{min_overlap:g} s at {at}; give the log of this take"
-                    + ("" if clock_offset is None else " or the right --clock-offset"))
-            s, cols = _cut(take, clock, min_overlap)
-            stage.append((i, s, cols, clock, att0[i]))
-        except FwidError as e:
-            failures[str(f)] = str(e)
+        if take.onboard is None:
+            stage.append((i, slice(None), dict(take.controls), None, att0[i]))
+        elif isinstance(aligned[i], Failed):
+            failures[str(f)] = aligned[i].message
             say(f"{f.name}: failed (below)")
+        else:
+            s, cols, clock = aligned[i]
+            stage.append((i, s, cols, clock, att0[i]))
     # 2. attitude with the gyro, about the first pass's attitude; translation
     with_gyro = [st for st in stage if st[3] is not None]
     att1 = _attitude([ok[i][1] for i, *_ in with_gyro],

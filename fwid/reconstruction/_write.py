@@ -15,6 +15,7 @@ import numpy as np
 
 from .._errors import InputError
 from ..data._sidefiles import VEHICLE_FILE
+from ._workers import run_all
 
 REPORT = "reconstruction.json"
 
@@ -64,7 +65,7 @@ def write_flight(out_dir, flight) -> Path:
     return path
 
 
-def write_reconstruction(result, out_dir) -> list[Path]:
+def write_reconstruction(result, out_dir, *, pool=None) -> list[Path]:
     """Write the flights, `vehicle.json` and `reconstruction.json` of a reconstruction.
 
     Each file is written atomically into `out_dir`; the flights' `vehicle.json` must agree;
@@ -72,7 +73,9 @@ def write_reconstruction(result, out_dir) -> list[Path]:
 
     **Arguments:**
     - `result`: what [`fwid.reconstruct`][] returned;
-    - `out_dir`: the folder (created if needed).
+    - `out_dir`: the folder (created if needed);
+    - `pool`: worker processes that write the flights (`fwid.reconstruction._workers.start`),
+      or None: here.
 
     **Returns:** the paths written.
     """
@@ -84,8 +87,8 @@ def write_reconstruction(result, out_dir) -> list[Path]:
     if len(vehicles) > 1:
         raise InputError(f"the takes have different vehicle.json files; reconstruct them into "
                          f"separate --out folders ({', '.join(fl.vehicle_path for fl in result.flights)})")
-    for fl in result.flights:
-        written.append(write_flight(out, fl))
+    out.mkdir(parents=True, exist_ok=True)
+    written += run_all(write_flight, [((out, fl), {}) for fl in result.flights], pool)
     if result.flights:
         v = out / VEHICLE_FILE
         _atomic(v, json.dumps(result.flights[0].vehicle, indent=2) + "\n")

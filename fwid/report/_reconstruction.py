@@ -4,7 +4,8 @@ gyro against the smoothed rates, dropouts shaded, the clock offset in the title.
 Each series is drawn through its envelope (`envelope`: the smallest and the largest sample
 of each of `POINTS` slices of the take, in time order), which at the figure's width looks as
 the whole series does (every glitch and every flapping peak stays) at a fraction of the
-drawing time of a minute's 12000 samples per panel; the panels are placed by a fixed layout.
+drawing time of a minute's 12000 samples per panel; the panels are placed by a fixed layout,
+with few ticks, and only the bottom row draws its time axis.
 """
 
 from __future__ import annotations
@@ -14,9 +15,12 @@ from pathlib import Path
 import numpy as np
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 #: Slices of a take whose extreme samples are drawn (about two per pixel of a panel).
 POINTS = 600
+#: Tick intervals per axis, at most.
+TICKS = 4
 
 
 def envelope(t: np.ndarray, y: np.ndarray, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
@@ -127,6 +131,11 @@ def plot_reconstruction(flight, *, path: str | Path | None = None,
                 a.set_ylabel(f"{name} [{unit}]")
                 if r == 0:
                     a.legend(loc="upper right", fontsize=7)
+                # few ticks: the axes' text is most of the drawing time
+                a.yaxis.set_major_locator(MaxNLocator(nbins=TICKS))
+                a.xaxis.set_major_locator(MaxNLocator(nbins=TICKS))
+                if r < 2:
+                    a.xaxis.set_visible(False)  # the bottom row's time axis serves the column
             ax[2, col].set_xlabel("t [s]")
         figure._fwid_reconstruction = art
     ax = art["ax"]
