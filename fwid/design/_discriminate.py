@@ -9,8 +9,9 @@ give in favour of the true model, twice over: its expected value under either mo
 
 A model fitted on small manoeuvres may diverge for a large one (the quadratic terms of
 `nonlinear-aero` in the simulated states, extrapolated): the amplitude is then halved until
-both models' predictions of a 3211 stay finite (`limits["amplitude_used_rad"]`), the attitude
-bound is that 3211's, and one restart starts from it, so that a gradient exists.
+both models' predictions of a 3211 stay finite (`limits["amplitude_used_rad"]`) and the attitude
+bound is that 3211's. With steps, one restart starts from that 3211, so that a gradient exists
+and the design starts from the input it is compared with.
 """
 
 from __future__ import annotations
@@ -190,9 +191,10 @@ def design_discriminating(
         return -jnp.log(distance(bounded(signal(x)))[0] + 1e-300)
 
     starts = jax.vmap(start)(jax.random.split(jax.random.PRNGKey(seed), restarts))
-    if parametrisation == "steps" and used < amplitude:
-        # one restart from the 3211 (finite there): random full-amplitude steps may all
-        # diverge, where the bounded signal is zero and has no gradient
+    if parametrisation == "steps":
+        # one restart from the 3211 (finite there): the design starts from the input it is
+        # compared with, and random full-amplitude steps may all diverge, where the bounded
+        # signal is zero and has no gradient
         starts = starts.at[0].set(_steps_start(grid, u3211 / used, switch_rate))
     _say(progress, f"discriminating design: {parametrisation}, {restarts} restarts")
     xs, fs, _ = minimise(loss, starts, iterations=iterations,
