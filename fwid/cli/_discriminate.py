@@ -239,5 +239,9 @@ def discriminate(args) -> int:
     written = write_discrimination(d, control, info, Path(args.out))
     print(f"fwid: input telling {pair[0][0]} from {pair[1][0]}: expected difference "
           f"{d.distance:.3g} ({d.distance / max(d.distance_3211, 1e-300):.2f}x a 3211's)")
+    used = d.limits["amplitude_used_rad"]
+    if used < args.amplitude:
+        print(f"fwid: amplitude lowered to {used:.3g} rad: a model's prediction of a 3211 of "
+              f"{2 * used:.3g} rad diverges (a model fitted on smaller manoeuvres)")
     print(f"fwid: {', '.join(written)} in {args.out}/")
     return 0
