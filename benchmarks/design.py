@@ -310,7 +310,8 @@ def run_discrimination(seeds, out: Path, log) -> dict:
                 continue
             row["design_s"], row["load"] = time.perf_counter() - t0, os.getloadavg()[0]
             row["amplitude_used_rad"] = disc.limits["amplitude_used_rad"]
-            row["distance_ratio_vs_3211"] = disc.distance / max(disc.distance_3211, 1e-300)
+            row["distance_ratio_vs_3211"] = disc.to_json()["criterion"]["ratio"]
+            row["reference_3211_unit_s"] = disc.limits["reference_3211_unit_s"]
             new = _synth_flight(true, disc.t, disc.u, base + 20, out, f"{tag}_des", strength,
                                 added)
             ctl = _synth_flight(true, disc.t, disc.u_3211, base + 20, out, f"{tag}_ctl",

@@ -8,10 +8,12 @@ give in favour of the true model, twice over: its expected value under either mo
 `D / 2`), under the same limits as [`fwid.design_input`][].
 
 A model fitted on small manoeuvres may diverge for a large one (the quadratic terms of
-`nonlinear-aero` in the simulated states, extrapolated): the amplitude is then halved until
-both models' predictions of a 3211 stay finite (`limits["amplitude_used_rad"]`) and the attitude
-bound is that 3211's. With steps, one restart starts from that 3211, so that a gradient exists
-and the design starts from the input it is compared with.
+`nonlinear-aero` in the simulated states, extrapolated). The reference 3211 (the attitude
+bound, and with steps one restart, so that a gradient exists) is the first whose predictions
+by both models stay finite: filling the window, else faster (units of T/14, T/28), else at
+half the amplitude, and so on (`limits["amplitude_used_rad"]`,
+`limits["reference_3211_unit_s"]`). The comparison is the window-filling 3211 of the
+amplitude used; its `distance_3211` is `nan` when a model's prediction of it diverges.
 """
 
 from __future__ import annotations
@@ -55,7 +57,8 @@ class Discrimination(eqx.Module):
         return {"criterion": {"name": "expected difference of the two models' predicted "
                                       "outputs, sum_k d_k^T R^-1 d_k",
                               "designed": self.distance, "3211": self.distance_3211,
-                              "ratio": self.distance / max(self.distance_3211, 1e-300)},
+                              "ratio": self.distance / max(self.distance_3211, 1e-300)
+                              if np.isfinite(self.distance_3211) else None},
                 "limits": self.limits, "settings": self.settings}
 
 
@@ -155,21 +158,30 @@ def design_discriminating(
         d = (ya - yb) @ W.T
         return jnp.sum(d**2), ya, yb
 
-    used = amplitude  # halved while a model's prediction of a 3211 diverges
+    # the reference 3211 (the attitude bound, a restart): at the full amplitude, filling the
+    # window or faster (units of T/7, T/14, T/28, no shorter than a step), else halved
+    units = [grid.length / k for k in (7, 14, 28) if grid.length / k >= 1.0 / switch_rate
+             or k == 7]
+    used, ref, unit = amplitude, None, None
     for _ in range(HALVINGS + 1):
-        u3211 = input_3211(grid, used)
-        if _finite(responses(jnp.asarray(u3211)), att):
-            break
-        used *= 0.5
+        for unit in units:
+            ref = input_3211(grid, used, unit)
+            if _finite(responses(jnp.asarray(ref)), att):
+                break
+        else:
+            used *= 0.5
+            continue
+        break
     else:
         raise InputError(f"design: a model's prediction diverges even for a 3211 of "
                          f"{used * 2:.3g} rad ({amplitude:g} rad / 2^{HALVINGS}): that model "
                          "is unstable at trim; check its fit (re-fit it on more flights) "
                          "before designing with it")
+    u3211 = input_3211(grid, used)  # the comparison: filling the window
     if att is None or attitude_bound is None:
         bound = None
     elif attitude_bound == "3211":
-        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in responses(u3211)))
+        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in responses(ref)))
     else:
         bound = float(attitude_bound)
 
@@ -195,7 +207,7 @@ def design_discriminating(
         # one restart from the 3211 (finite there): the design starts from the input it is
         # compared with, and random full-amplitude steps may all diverge, where the bounded
         # signal is zero and has no gradient
-        starts = starts.at[0].set(_steps_start(grid, u3211 / used, switch_rate))
+        starts = starts.at[0].set(_steps_start(grid, ref / used, switch_rate))
     _say(progress, f"discriminating design: {parametrisation}, {restarts} restarts")
     xs, fs, _ = minimise(loss, starts, iterations=iterations,
                          learning_rate=0.05 if parametrisation == "multisine" else 0.1,
@@ -217,6 +229,7 @@ def design_discriminating(
                                                   for y in ys))
 
     limits = {"amplitude_rad": amplitude, "amplitude_used_rad": used,
+              "reference_3211_unit_s": float(unit),
               "peak_rad": float(np.max(np.abs(u))),
               "duration_s": grid.duration, "quiet_s": grid.quiet,
               "attitude": attitude if att is not None else None,
