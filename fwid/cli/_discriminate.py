@@ -237,7 +237,13 @@ def discriminate(args) -> int:
             "refit_on": [f.name for f in flights], "held": held,
             "R": "the baseline's joint fit (Eq. 11)"}
     written = write_discrimination(d, control, info, Path(args.out))
+    ratio = d.to_json()["criterion"]["ratio"]
     print(f"fwid: input telling {pair[0][0]} from {pair[1][0]}: expected difference "
-          f"{d.distance:.3g} ({d.distance / max(d.distance_3211, 1e-300):.2f}x a 3211's)")
+          f"{d.distance:.3g} (" + (f"{ratio:.2f}x a 3211's)" if ratio is not None else
+                                   "a model's prediction of a 3211 diverges)"))
+    used = d.limits["amplitude_used_rad"]
+    if used < args.amplitude:
+        print(f"fwid: amplitude lowered to {used:.3g} rad: a model's prediction of a 3211 of "
+              f"{2 * used:.3g} rad diverges (a model fitted on smaller manoeuvres)")
     print(f"fwid: {', '.join(written)} in {args.out}/")
     return 0

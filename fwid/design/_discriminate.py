@@ -6,6 +6,14 @@ maximises the expected difference between their predicted outputs, normalised by
 `D = sum_k (y_a,k - y_b,k)^T R^-1 (y_a,k - y_b,k)` (the log-likelihood ratio one flight would
 give in favour of the true model, twice over: its expected value under either model is
 `D / 2`), under the same limits as [`fwid.design_input`][].
+
+A model fitted on small manoeuvres may diverge for a large one (the quadratic terms of
+`nonlinear-aero` in the simulated states, extrapolated). The reference 3211 (the attitude
+bound, and with steps one restart, so that a gradient exists) is the first whose predictions
+by both models stay finite: filling the window, else faster (units of T/14, T/28), else at
+half the amplitude, and so on (`limits["amplitude_used_rad"]`,
+`limits["reference_3211_unit_s"]`). The comparison is the window-filling 3211 of the
+amplitude used; its `distance_3211` is `nan` when a model's prediction of it diverges.
 """
 
 from __future__ import annotations
@@ -30,8 +38,9 @@ from ._signals import Grid, input_3211
 class Discrimination(eqx.Module):
     """A discriminating input: `t`, `u` (the control), the two models' predicted outputs
     `response_a`, `response_b` `(n, outputs)`, the expected difference `distance` (`D`) and
-    that of a 3211 of the same amplitude and length (`distance_3211`), `limits`,
-    `settings`."""
+    that of a 3211 of the same amplitude and length (`distance_3211`, `u_3211`; the amplitude
+    used, `limits["amplitude_used_rad"]`, is below the one asked for where a model's
+    prediction diverged), `limits`, `settings`."""
 
     t: np.ndarray
     u: np.ndarray
@@ -48,8 +57,34 @@ class Discrimination(eqx.Module):
         return {"criterion": {"name": "expected difference of the two models' predicted "
                                       "outputs, sum_k d_k^T R^-1 d_k",
                               "designed": self.distance, "3211": self.distance_3211,
-                              "ratio": self.distance / max(self.distance_3211, 1e-300)},
+                              "ratio": self.distance / max(self.distance_3211, 1e-300)
+                              if np.isfinite(self.distance_3211) else None},
                 "limits": self.limits, "settings": self.settings}
+
+
+#: How often the amplitude is halved while a model's prediction of a 3211 diverges.
+HALVINGS = 6
+
+
+def _finite(ys, att: int | None) -> bool:
+    """Whether predictions stay finite (and the attitude, when given, within a half turn:
+    beyond it a model has left every region it was fitted in)."""
+    for y in ys:
+        y = np.asarray(y)
+        if not np.all(np.isfinite(y)) or (att is not None and np.max(np.abs(y[:, att])) > np.pi):
+            return False
+    return True
+
+
+def _steps_start(grid: Grid, pattern: np.ndarray, switch_rate: float) -> jnp.ndarray:
+    """The step coefficients `x` (`A tanh(x)`) nearest the signal `pattern` (in units of
+    the amplitude): its mean over each step, kept inside `tanh`'s range."""
+    from ._signals import step_index
+
+    idx, k = step_index(grid, switch_rate)
+    mean = np.array([np.mean(pattern[idx == j]) if np.any(idx == j) else 0.0
+                     for j in range(k)])
+    return jnp.asarray(np.arctanh(np.clip(mean, -0.95, 0.95)))
 
 
 def _default_inputs(model: GreyBoxModel) -> Callable:
@@ -123,11 +158,30 @@ def design_discriminating(
         d = (ya - yb) @ W.T
         return jnp.sum(d**2), ya, yb
 
-    u3211 = input_3211(grid, amplitude)
+    # the reference 3211 (the attitude bound, a restart): at the full amplitude, filling the
+    # window or faster (units of T/7, T/14, T/28, no shorter than a step), else halved
+    units = [grid.length / k for k in (7, 14, 28) if grid.length / k >= 1.0 / switch_rate
+             or k == 7]
+    used, ref, unit = amplitude, None, None
+    for _ in range(HALVINGS + 1):
+        for unit in units:
+            ref = input_3211(grid, used, unit)
+            if _finite(responses(jnp.asarray(ref)), att):
+                break
+        else:
+            used *= 0.5
+            continue
+        break
+    else:
+        raise InputError(f"design: a model's prediction diverges even for a 3211 of "
+                         f"{used * 2:.3g} rad ({amplitude:g} rad / 2^{HALVINGS}): that model "
+                         "is unstable at trim; check its fit (re-fit it on more flights) "
+                         "before designing with it")
+    u3211 = input_3211(grid, used)  # the comparison: filling the window
     if att is None or attitude_bound is None:
         bound = None
     elif attitude_bound == "3211":
-        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in responses(u3211)))
+        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in responses(ref)))
     else:
         bound = float(attitude_bound)
 
@@ -139,7 +193,7 @@ def design_discriminating(
         # a prediction that diverges (a nonlinear model) counts as over the bound
         return u * jnp.where(jnp.isfinite(peak), jnp.minimum(1.0, bound / peak), 0.0)
 
-    basis, coef, start = _parametrisation(parametrisation, grid, amplitude, switch_rate, band)
+    basis, coef, start = _parametrisation(parametrisation, grid, used, switch_rate, band)
     E = jnp.asarray(basis)
 
     def signal(x):
@@ -149,22 +203,34 @@ def design_discriminating(
         return -jnp.log(distance(bounded(signal(x)))[0] + 1e-300)
 
     starts = jax.vmap(start)(jax.random.split(jax.random.PRNGKey(seed), restarts))
+    if parametrisation == "steps":
+        # one restart from the 3211 (finite there): the design starts from the input it is
+        # compared with, and random full-amplitude steps may all diverge, where the bounded
+        # signal is zero and has no gradient
+        starts = starts.at[0].set(_steps_start(grid, ref / used, switch_rate))
     _say(progress, f"discriminating design: {parametrisation}, {restarts} restarts")
     xs, fs, _ = minimise(loss, starts, iterations=iterations,
                          learning_rate=0.05 if parametrisation == "multisine" else 0.1,
                          progress=progress, label="discriminating design")
     u = np.asarray(bounded(signal(jnp.asarray(xs[int(np.argmin(fs))]))))
     D, ya, yb = distance(jnp.asarray(u))
-    if not np.isfinite(float(D)) or float(D) <= 0:
-        raise InputError("design: the two models' predictions diverge (or agree) for every "
-                         "input tried; lower the amplitude or give an attitude bound")
+    if not np.isfinite(float(D)):
+        raise InputError(f"design: the two models' predictions diverge for every input "
+                         f"tried (peak {used:.3g} rad); lower the amplitude or give a smaller "
+                         "attitude bound")
+    if float(D) <= 0:
+        raise InputError("design: the two models predict the same outputs for every input "
+                         "tried: the effects differ only through inputs the control does not "
+                         "drive (held at zero); fly a manoeuvre that excites those instead")
     D3, ya3, yb3 = distance(jnp.asarray(u3211))
 
     def peak(*ys):
         return None if att is None else float(max(np.max(np.abs(np.asarray(y)[:, att]))
                                                   for y in ys))
 
-    limits = {"amplitude_rad": amplitude, "peak_rad": float(np.max(np.abs(u))),
+    limits = {"amplitude_rad": amplitude, "amplitude_used_rad": used,
+              "reference_3211_unit_s": float(unit),
+              "peak_rad": float(np.max(np.abs(u))),
               "duration_s": grid.duration, "quiet_s": grid.quiet,
               "attitude": attitude if att is not None else None,
               "attitude_bound_rad": bound, "attitude_peak_rad": peak(ya, yb),

@@ -28,3 +28,45 @@ def test_the_distance_is_the_noise_normalised_difference_and_beats_a_3211():
     # models differing in the gain alone: the best input holds the output up, the most
     # energy the low-pass passes: one sign for most of the window
     assert abs(np.mean(np.sign(d.u[d.t > 1.0]))) > 0.6
+
+
+def test_a_model_that_diverges_for_the_3211_gets_a_faster_reference_or_a_smaller_one():
+    # x' = -x + c x^2 + u has no equilibrium for u > 1/(4c) (finite escape): a slow 3211
+    # diverges in model a; the reference is the first 3211 whose prediction stays finite
+    # (filling the window, faster, then at half the amplitude), the design made from it
+    # (before: "diverge for every input tried", or a design compared with a diverged 3211)
+    def f(x, u, p, c):
+        return jnp.stack([-x[0] + p["c"] * x[0] ** 2 + u[0]])
+    mb = fwid.GreyBoxModel(f, states=("x",), inputs=("u",), params={"c": 0.0})
+    t = np.arange(81) / 10.0
+
+    def response(model, u):
+        exp = fwid.Experiment(t, u, np.zeros(t.size), x0=np.zeros(1))
+        return np.asarray(fwid.simulate(model, exp)[1])
+    grid = fwid.design._signals.Grid(8.0, 1.0, 10.0)
+    for c, kept in ((1.0, True), (4.0, False)):
+        ma = fwid.GreyBoxModel(f, states=("x",), inputs=("u",), params={"c": c})
+        d = fwid.design_discriminating(ma, mb, consts={}, R=[[1e-4]], amplitude=1.0,
+                                       duration=8.0, quiet=1.0, rate=10.0,
+                                       attitude_bound=None, restarts=2, iterations=30,
+                                       switch_rate=2.0)
+        used, unit = d.limits["amplitude_used_rad"], d.limits["reference_3211_unit_s"]
+        assert (used == 1.0) == kept
+        slower = [u for u in (1.0, 0.5) if u > unit]  # T/7, T/14 (T/28 < a step)
+        ref = fwid.design._signals.input_3211(grid, used, unit)
+        assert np.all(np.isfinite(response(ma, ref)))
+        for u in slower:  # the slower ones at that amplitude diverge ...
+            assert not np.all(np.isfinite(response(ma, fwid.design._signals.input_3211(
+                grid, used, u))))
+        if not kept:  # ... and every one at twice the amplitude
+            for u in (1.0, 0.5):
+                assert not np.all(np.isfinite(response(ma, fwid.design._signals.input_3211(
+                    grid, 2 * used, u))))
+        assert np.max(np.abs(d.u)) <= used + 1e-12
+        ya, yb = response(ma, d.u), response(mb, d.u)
+        assert np.all(np.isfinite(ya))
+        assert d.distance == pytest.approx(np.sum((ya - yb) ** 2) / 1e-4, rel=1e-9)
+        if np.isfinite(d.distance_3211):
+            assert d.distance >= d.distance_3211 > 0
+        else:
+            assert d.to_json()["criterion"]["ratio"] is None
