@@ -32,7 +32,7 @@ from ..simulation._simulate import simulate
 from ._design import check_limits
 from ._optimise import _say, minimise
 from ._criterion import parametrisation as _parametrisation
-from ._signals import Grid, input_3211
+from ._signals import Grid, input_3211, step_index
 
 
 class Discrimination(eqx.Module):
@@ -79,8 +79,6 @@ def _finite(ys, att: int | None) -> bool:
 def _steps_start(grid: Grid, pattern: np.ndarray, switch_rate: float) -> jnp.ndarray:
     """The step coefficients `x` (`A tanh(x)`) nearest the signal `pattern` (in units of
     the amplitude): its mean over each step, kept inside `tanh`'s range."""
-    from ._signals import step_index
-
     idx, k = step_index(grid, switch_rate)
     mean = np.array([np.mean(pattern[idx == j]) if np.any(idx == j) else 0.0
                      for j in range(k)])
@@ -162,21 +160,19 @@ def design_discriminating(
     # window or faster (units of T/7, T/14, T/28, no shorter than a step), else halved
     units = [grid.length / k for k in (7, 14, 28) if grid.length / k >= 1.0 / switch_rate
              or k == 7]
-    used, ref, unit = amplitude, None, None
-    for _ in range(HALVINGS + 1):
-        for unit in units:
-            ref = input_3211(grid, used, unit)
-            if _finite(responses(jnp.asarray(ref)), att):
-                break
-        else:
-            used *= 0.5
-            continue
-        break
-    else:
+
+    def reference():
+        for h in range(HALVINGS + 1):
+            for unit in units:
+                ref = input_3211(grid, amplitude / 2**h, unit)
+                if _finite(responses(jnp.asarray(ref)), att):
+                    return amplitude / 2**h, ref, unit
         raise InputError(f"design: a model's prediction diverges even for a 3211 of "
-                         f"{used * 2:.3g} rad ({amplitude:g} rad / 2^{HALVINGS}): that model "
-                         "is unstable at trim; check its fit (re-fit it on more flights) "
-                         "before designing with it")
+                         f"{amplitude / 2**HALVINGS:.3g} rad ({amplitude:g} rad / "
+                         f"2^{HALVINGS}): that model is unstable at trim; check its fit "
+                         "(re-fit it on more flights) before designing with it")
+
+    used, ref, unit = reference()
     u3211 = input_3211(grid, used)  # the comparison: filling the window
     if att is None or attitude_bound is None:
         bound = None

@@ -50,7 +50,8 @@ IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
 
 
 def _quadratic_terms(axis: str, state_index: dict[str, int]) -> list[tuple[str, str, tuple]]:
-    """`nonlinear-aero`'s terms as `Term`s, in `_catalogue.quadratic_names` order."""
+    """`nonlinear-aero`'s terms as `(suffix, kind, state indices)` (see `_term`), in
+    `_catalogue.quadratic_names` order."""
     xs = [state_index[s] for s in AXIS_STATES[axis]]
     names = AXIS_STATES[axis]
     out = []
