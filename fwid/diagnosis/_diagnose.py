@@ -18,9 +18,9 @@ from ._probes import PROBES, drivers
 from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
 from ._augment import IN_EOM
-from ._simulation import SimulationGap, simulation_gap, start_augmented, start_baseline
+from ._simulation import EarlyFits, SimulationGap, simulation_gap, start_baseline
 from ._selection import ALPHA, MIN_GAIN, forward_select
-from ._significance import BLOCK_S, cross_fit_folds
+from ._significance import BLOCK_S, cross_fit_folds, scoring_blocks
 from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
 
 
@@ -131,19 +131,6 @@ def _variant_text(v, axis: str = "lon") -> str | None:
 AFFECTED_SHARE = 0.25
 
 
-def _blocks(sigs, first: int) -> tuple[list, list]:
-    """Each flight (unit `first + k`) cut into scoring blocks of about `BLOCK_S` seconds:
-    the blocks' signals and their `(parent unit, rows)`."""
-    out, parents = [], []
-    for k, s in enumerate(sigs):
-        count = max(1, round(s.n * s.dt / BLOCK_S))
-        for b in range(count):
-            out.append(s.block(b, count))
-            lo, hi = s.block_rows(b, count)
-            parents.append((first + k, slice(lo, hi)))
-    return out, parents
-
-
 def diagnose(
     train: Sequence[Flight],
     test: Sequence[Flight],
@@ -241,8 +228,8 @@ def diagnose(
     te_sig = [signals(f, cutoff=cutoff) for f in test]
     check_excitation(tr_sig, axis)
     baseline = start_baseline(train, test, axis, cutoff) if simulation else None
-    tr_blocks, tr_par = _blocks(tr_sig, 0)
-    te_blocks, te_par = _blocks(te_sig, len(tr_sig))
+    tr_blocks, tr_par = scoring_blocks(tr_sig, 0)
+    te_blocks, te_par = scoring_blocks(te_sig, len(tr_sig))
     engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
                     loads, tuple(catalogue) + tuple(probes), own=AXIS_LOADS[axis])
     n_tr, n_te, n_trb = len(tr_sig), len(te_sig), len(tr_blocks)
@@ -256,15 +243,11 @@ def diagnose(
 
     say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
         f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")
-    # the augmented model's fit for the first round's leader starts at once, beside the later
-    # rounds: it is the simulation's model whenever the verdict is that effect alone
-    early: dict[str, object] = {}
+    early = EarlyFits(train, test, axis, cutoff, baseline) if simulation else None
 
-    def on_first(e: Effect) -> None:
-        if simulation and e.name in IN_EOM and e.name in {c.name for c in catalogue}:
-            effects = [(e.name, unwrap(engine.choose(train_idx, (), e, sigma2)))]
-            early[repr(effects)] = start_augmented(train, test, axis, effects, cutoff,
-                                                   baseline)
+    def on_first(e: Effect) -> None:  # the leader's augmented fit starts now (`EarlyFits`)
+        if early is not None and e.name in IN_EOM and not e.probe:
+            early.start([(e.name, unwrap(engine.choose(train_idx, (), e, sigma2)))])
 
     sel = forward_select(engine, halves, tuple(catalogue) + tuple(probes), alpha, min_gain,
                          on_first=on_first)
@@ -453,7 +436,7 @@ def diagnose(
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
             + " fitted by output error on the training flights, simulated on the test flights")
         sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result(),
-                             augmented=early.get(repr(list(in_sim))))
+                             augmented=early.get(in_sim))
 
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,

@@ -172,3 +172,16 @@ def cross_fit_folds(engine: Engine, n_flights: int, block_parents, n_train: int,
         score = tuple(n_flights + j for j, p in enumerate(block_parents) if p in g)
         out.append(Half(fit, score, engine.mean_square(fit)))
     return out
+
+
+def scoring_blocks(sigs, first: int) -> tuple[list, list]:
+    """Each flight (unit `first + k`) cut into scoring blocks of about `BLOCK_S` seconds:
+    the blocks' signals and their `(parent unit, rows)`."""
+    out, parents = [], []
+    for k, s in enumerate(sigs):
+        count = max(1, round(s.n * s.dt / BLOCK_S))
+        for b in range(count):
+            out.append(s.block(b, count))
+            lo, hi = s.block_rows(b, count)
+            parents.append((first + k, slice(lo, hi)))
+    return out, parents

@@ -109,6 +109,24 @@ def start_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     return future
 
 
+class EarlyFits:
+    """The augmented models' fits started before the verdict is known (`start_augmented`,
+    once `baseline`, `start_baseline`'s future, is done), by the effects they fit:
+    `simulation_gap` takes the one for the verdict's effects (`get`; `None`: none started)."""
+
+    def __init__(self, train: Sequence[Flight], test: Sequence[Flight], axis: str,
+                 cutoff: float, baseline: Future):
+        self.args, self.cutoff, self.baseline = (train, test, axis), cutoff, baseline
+        self.started: dict[str, Future] = {}
+
+    def start(self, effects: Sequence[tuple[str, object]]) -> None:
+        self.started[repr(list(effects))] = start_augmented(*self.args, list(effects),
+                                                            self.cutoff, self.baseline)
+
+    def get(self, effects: Sequence[tuple[str, object]]) -> Future | None:
+        return self.started.get(repr(list(effects)))
+
+
 def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                    effects: Sequence[tuple[str, object]], cutoff: float = 5.0,
                    baseline: Identification | None = None,

@@ -84,15 +84,15 @@ def test_block_statistic_is_a_one_sided_t_test(effect_flights):
     from scipy import stats
 
     from fwid.diagnosis._attribution import Engine, units
-    from fwid.diagnosis._diagnose import _blocks
+    from fwid.diagnosis._significance import scoring_blocks
     from fwid.diagnosis._significance import Half, evidence
     from fwid.diagnosis._signals import signals
 
     train, test = (fwid.load_flights(p) for p in effect_flights(
         "actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4))
     tr, te = [signals(f) for f in train], [signals(f) for f in test]
-    trb, trp = _blocks(tr, 0)
-    teb, tep = _blocks(te, 4)
+    trb, trp = scoring_blocks(tr, 0)
+    teb, tep = scoring_blocks(te, 4)
     eng = Engine(units(tr + te) + units(trb + teb, trp + tep), ("X", "Z", "M"))
     a, b = (0, 1, 2, 3), (4, 5, 6, 7)
     nb = len(trb)
