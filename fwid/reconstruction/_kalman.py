@@ -8,11 +8,11 @@ one covariance (e.g. the three position axes of one model).
 after the other. The innovation statistics give the Gaussian log-likelihood of the data
 (for the noise levels), with the overall scale of `Q`, `R` and `P0` concentrated out.
 
-Many problems run at once, their batch axes *last* (`...` below; they broadcast against
-each other): each product of a step is an elementwise product summed over a short axis
-(or, with `lead`, a few scaled rows added), which XLA fuses into loops over the whole
-batch: per problem and step, the filter takes about half the time of small matrix products
-`vmap`ped over the problems, the smoother about two thirds.
+Each product of a step is written as an elementwise product summed over a short axis (or,
+with `lead`, a few scaled rows added), not as a matrix product: `vmap`ped over many
+problems (the problems as the last axis, `_smoother`), XLA fuses them into loops over the
+whole batch, and the filter takes about half the time per problem and step of small matrix
+products vmapped, the smoother about two thirds.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ BURN_IN = 20
 
 
 def _update(x, P, h, z, r, valid):
-    """One scalar measurement `z` `(c, ...)` (one per column of `x` `(n, c, ...)`) with row
-    `h` `(n, ...)` and variance `r`, where `valid`; for `P` `(n, n, ...)`. Returns the
+    """One scalar measurement `z` `(c,)` (one per column of `x` `(n, c)`) with row `h`
+    `(n,)` and variance `r`, where `valid`; for `P` `(n, n)`. Returns the
     updated `x`, `P`, the innovation variance `S`, the innovation `nu` (0 where not valid)
     and the gain `K` (0 where not valid)."""
     Ph = jnp.sum(P * h[None], 1)
@@ -57,11 +57,7 @@ def _propagate(F, x, P, Q, lead):
 def _forward(F, Q, H, R, z, mask, u, m0, P0, lead, keep):
     """The filter's scan: the innovation statistics and, with `keep`, each step's predicted
     mean and covariance, gains and weighted innovations `nu / S` (0 where unmeasured)."""
-    n, c = m0.shape[:2]
-    batch = jnp.broadcast_shapes(m0.shape[2:], Q.shape[2:])
-    x0 = jnp.broadcast_to(m0, (n, c) + batch)
-    Pb = jnp.broadcast_to(P0.reshape(P0.shape + (1,) * len(batch)), (n, n) + batch)
-    nu_ = u.shape[1]
+    c, nu_ = m0.shape[1], u.shape[1]
 
     def step(carry, inp):
         x, P, acc = carry
@@ -70,9 +66,7 @@ def _forward(F, Q, H, R, z, mask, u, m0, P0, lead, keep):
         for i in range(h_k.shape[0]):
             x, P, S, nu, K = _update(x, P, h_k[i], z_k[i], R[i], mk[i])
             use = mk[i] & (k >= BURN_IN)
-            stats = jnp.stack(jnp.broadcast_arrays(c * jnp.log(S), jnp.sum(nu**2, 0) / S,
-                                                   jnp.full_like(S, c)))
-            acc = acc + jnp.where(use, stats, 0.0)
+            acc = acc + jnp.where(use, jnp.array([c * jnp.log(S), jnp.sum(nu**2) / S, c]), 0.0)
             Ks.append(K)
             Ws.append(nu / S)
         x, P = _propagate(F, x, P, Q, lead)
@@ -80,35 +74,34 @@ def _forward(F, Q, H, R, z, mask, u, m0, P0, lead, keep):
         return (x, P, acc), ((x_pred, P_pred, jnp.stack(Ks), jnp.stack(Ws)) if keep else None)
 
     ks = jnp.arange(z.shape[0])
-    return jax.lax.scan(step, (x0, Pb, jnp.zeros((3,) + batch)), (H, z, mask, u, ks))
+    return jax.lax.scan(step, (m0, P0, jnp.zeros(3)), (H, z, mask, u, ks))
 
 
 def filter_stats(F, Q, H, R, z, mask, u, m0, P0, lead=None):
-    """The innovation statistics of the filter `(3, ...)`: `(sum log S, sum nu^2 / S, count)`
+    """The innovation statistics of the filter: `(sum log S, sum nu^2 / S, count)`
     over the valid scalar measurements after `BURN_IN` samples, each counted once per data
     column.
 
-    **Arguments:** `F` `(n, n)`; `Q` `(n, n, ...)`; `H` `(N, m, n, ...)`; `R` `(m, ...)`; `z`
-    `(N, m, c, ...)`; `mask` `(N, m, ...)`; `u` `(N, n_u, c, ...)`, the input of the first
-    `n_u` states; `m0` `(n, c, ...)`; `P0` `(n, n)`; `lead`: where `F` is the identity but
-    for its leading `lead x lead` block (faster), or None. The batch axes `...` of the
-    arguments broadcast against each other; those of `Q` and `m0` make the whole batch.
+    **Arguments:** `F`, `Q` `(n, n)`; `H` `(N, m, n)`; `R` `(m,)`; `z` `(N, m, c)`; `mask`
+    `(N, m)`; `u` `(N, n_u, c)`, the known input of the first `n_u` states; `m0` `(n, c)`;
+    `P0` `(n, n)`; `lead`: where `F` is the identity but for its leading `lead x lead` block
+    (faster), or None.
     """
     (_, _, acc), _ = _forward(F, Q, H, R, z, mask, u, m0, P0, lead, keep=False)
     return acc
 
 
-def concentrated_loglik(acc: Float[Array, "3 ..."]) -> Float[Array, "..."]:
+def concentrated_loglik(acc: Float[Array, "... 3"]) -> Float[Array, "..."]:
     """The log-likelihood with the noise scale `s` (multiplying Q, R, P0) at its maximum
     `s = mean(nu^2 / S)`: `-1/2 (N log s + sum log S + N)`, up to a constant."""
-    logS, nis, n = acc[0], acc[1], acc[2]
+    logS, nis, n = acc[..., 0], acc[..., 1], acc[..., 2]
     s = nis / jnp.maximum(n, 1.0)
     return -0.5 * (n * jnp.log(s) + logS + n)
 
 
 def smooth(F, Q, H, R, z, mask, u, m0, P0, lead=None):
-    """Smoothed means `(N, n, c, ...)` and the innovation statistics (`filter_stats`),
-    arguments as there.
+    """Smoothed means `(N, n, c)` and the innovation statistics (`filter_stats`), arguments
+    as there.
 
     The Rauch-Tung-Striebel smoother's means in the modified Bryson-Frazier form (Bierman):
     the backward pass carries an adjoint `lam` with `x_smooth = x_pred + P_pred lam` through

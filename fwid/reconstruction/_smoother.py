@@ -33,7 +33,7 @@ def _fns():
     and `smooth` (the smoothed totals, the gyro bias and the innovation statistics), both
     building the measurement rows and the inputs of the model from the flapping phase
     inside (no `(M, N, m, n)` array crosses to JAX). Each device runs its share of the
-    problems (`_spread`), as the last axes of the filter's arrays (`_kalman`)."""
+    problems (`_spread`, `shard_map`), vmapped as the last axis of the filter's arrays."""
     if not _JIT:
         import functools
 
@@ -44,30 +44,40 @@ def _fns():
         from ._kalman import concentrated_loglik, filter_stats, smooth
 
         lead = mdl.MIXING  # F = blockdiag(3 x 3, I): the structured products
-        last = functools.partial(jnp.moveaxis, source=0, destination=-1)  # problems last
+        filter_stats = functools.partial(filter_stats, lead=lead)
+        smooth = functools.partial(smooth, lead=lead)
+        last = functools.partial(jnp.moveaxis, source=0, destination=-1)
 
         def model(phase, omega, rate, Z, u):
-            """Rows `(N, n, M)`, `H` `(N, m, n, M)`, `Z` `(N, m, c, M)`, `U` `(N, 1, c, M)`."""
             bias = Z.shape[-2] == 2
-            rows = {k: last(v) for k, v in mdl.rows(phase, omega, rate, bias, xp=jnp).items()}
-            H = jnp.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), 1)
-            return rows, H, last(Z), last(u)[:, None]
+            rows = mdl.rows(phase, omega, rate, bias, xp=jnp)
+            H = jnp.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), -2)  # (N, m, n)
+            return rows, H, u[:, None]  # u: the input of the first state
+
+        def one_stats(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
+            _, H, U = model(phase, omega, rate, Z, u)
+            return jax.vmap(filter_stats, in_axes=(None, -1, None, -1, None, None, None, None,
+                                                   None))(F, Q, H, R, Z, MK, U, m0, P0)
+
+        def one_smooth(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
+            rows, H, U = model(phase, omega, rate, Z, u)
+            x, st = smooth(F, Q, H, R, Z, MK, U, m0, P0)
+            out = [jnp.einsum("kn,knc->kc", rows[k], x) for k in ("pos", "vel", "acc")]
+            return (*out, x[0, -1, :], st)
+
+        # the problems (and the grid's points) vmapped as the last axes: see `_kalman`
+        batched = (None, -1, -1, -1, None, -1, -1, -1, -1, -1, None)
+        stats = jax.vmap(one_stats, in_axes=batched[:5] + (None,) + batched[6:])
 
         def grid(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
-            # the batch (M, G): Q (M, G, n, n), R (G, m); the data (M, 1)
-            _, H, Zt, U = model(phase, omega, rate, Z, u)
-            acc = filter_stats(F, jnp.moveaxis(Q, (0, 1), (-2, -1)), H[..., None],
-                               R.T[:, None, :], Zt[..., None], last(MK)[..., None],
-                               U[..., None], last(m0)[..., None], P0, lead=lead)
-            return concentrated_loglik(acc)
+            # Q (M, G, n, n), R (G, m)
+            Q, R = jnp.moveaxis(Q, (0, 1), (-1, -2)), R.T
+            a = [last(x) for x in (phase, omega, Z, MK, u, m0)]
+            return concentrated_loglik(stats(F, Q, *a[:2], rate, R, *a[2:], P0))
 
         def smoothed(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
-            rows, H, Zt, U = model(phase, omega, rate, Z, u)
-            xs, acc = smooth(F, jnp.moveaxis(Q, 0, -1), H, R.T, Zt, last(MK), U, last(m0), P0,
-                             lead=lead)  # (N, n, c, M)
-            out = [jnp.moveaxis(jnp.sum(rows[k][:, :, None] * xs, 1), -1, 0)
-                   for k in ("pos", "vel", "acc")]  # (M, N, c)
-            return (*out, jnp.moveaxis(xs[0, -1], -1, 0), acc.T)
+            a = [last(x) for x in (Q, phase, omega, R, Z, MK, u, m0)]
+            return jax.vmap(one_smooth, in_axes=batched)(F, *a[:3], rate, *a[3:], P0)
 
         mesh = Mesh(np.array(jax.devices()), ("b",))
         b, r = PartitionSpec("b"), PartitionSpec()
