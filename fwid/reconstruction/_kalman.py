@@ -8,12 +8,11 @@ one covariance (e.g. the three position axes of one model).
 after the other. The innovation statistics give the Gaussian log-likelihood of the data
 (for the noise levels), with the overall scale of `Q`, `R` and `P0` concentrated out.
 
-Each product of a step is written as an elementwise product summed over a short axis (and,
-with `lead`, the transition as one small product with the shared `F`), not as a matrix
-product per problem: `vmap`ped over many
-problems (the problems as the last axis, `_smoother`), XLA fuses them into loops over the
-whole batch, and the filter takes about half the time per problem and step of small matrix
-products vmapped, the smoother about two thirds.
+Each product of a step is an elementwise product summed over a short axis (and, with
+`lead`, one small product with the shared `F`), not a matrix product per problem: `vmap`ped
+over many problems (the problems as the last axis, `_smoother`), XLA fuses them into loops
+over the whole batch; per problem and step the filter takes about half the time of small
+matrix products vmapped, the smoother about two thirds.
 """
 
 from __future__ import annotations
