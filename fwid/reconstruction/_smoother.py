@@ -1,5 +1,5 @@
 """Noise levels by maximum likelihood, then the Rauch-Tung-Striebel smoother, for a batch
-of independent problems of one length (vmapped: takes, or takes x attitude axes).
+of independent problems of one length (takes, or takes x attitude axes, run together).
 
 The noise levels come from the data: the smoother's cut-off `f_c` of the slow part, the
 bandwidth `f_h` of the flapping coefficients and (with a gyro) the gyro's noise relative to
@@ -20,50 +20,70 @@ from . import _model as mdl
 
 #: Samples used to choose the noise levels (the window where the slow motion is most active).
 ML_WINDOW = 1000
-#: Largest memory (bytes) of the stored smoother gains of one vmapped call.
-GAIN_BYTES = 2e8
+#: Largest memory (bytes) of one call of the smoother, about three times its stored
+#: covariances: the problems run in as few calls of one size as this allows (one call of
+#: all of them runs faster per problem and step than several of a part).
+GAIN_BYTES = 1.5e9
 
 _JIT = {}
 
 
 def _fns():
     """The compiled programs: `grid` (the log-likelihood of each problem at each grid point)
-    and `smooth` (the smoothed totals), both building the measurement rows and the inputs of
-    the model from the flapping phase inside (no `(M, N, m, n)` array crosses to JAX)."""
+    and `smooth` (the smoothed totals, the gyro bias and the innovation statistics), both
+    building the measurement rows and the inputs of the model from the flapping phase
+    inside (no `(M, N, m, n)` array crosses to JAX). Each device runs its share of the
+    problems (`_spread`, `shard_map`), vmapped as the last axis of the filter's arrays."""
     if not _JIT:
         import functools
 
         import jax
         import jax.numpy as jnp
+        from jax.sharding import Mesh, PartitionSpec
 
         from ._kalman import concentrated_loglik, filter_stats, smooth
 
         lead = mdl.MIXING  # F = blockdiag(3 x 3, I): the structured products
         filter_stats = functools.partial(filter_stats, lead=lead)
         smooth = functools.partial(smooth, lead=lead)
+        last = functools.partial(jnp.moveaxis, source=0, destination=-1)
 
-        def model(phase, omega, rate, Z, u, n):
+        def model(phase, omega, rate, Z, u):
             bias = Z.shape[-2] == 2
             rows = mdl.rows(phase, omega, rate, bias, xp=jnp)
             H = jnp.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), -2)  # (N, m, n)
-            U = jnp.zeros(u.shape[:-1] + (n,) + u.shape[-1:]).at[..., 0, :].set(u)
-            return rows, H, U
+            return rows, H, u[:, None]  # u: the input of the first state
 
         def one_stats(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
-            _, H, U = model(phase, omega, rate, Z, u, F.shape[0])
-            return jax.vmap(filter_stats, in_axes=(None, 0, None, 0, None, None, None, None,
+            _, H, U = model(phase, omega, rate, Z, u)
+            return jax.vmap(filter_stats, in_axes=(None, -1, None, -1, None, None, None, None,
                                                    None))(F, Q, H, R, Z, MK, U, m0, P0)
 
         def one_smooth(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
-            rows, H, U = model(phase, omega, rate, Z, u, F.shape[0])
+            rows, H, U = model(phase, omega, rate, Z, u)
             x, st = smooth(F, Q, H, R, Z, MK, U, m0, P0)
             out = [jnp.einsum("kn,knc->kc", rows[k], x) for k in ("pos", "vel", "acc")]
             return (*out, x[0, -1, :], st)
 
-        stats = jax.vmap(one_stats, in_axes=(None, 0, 0, 0, None, None, 0, 0, 0, 0, None))
-        _JIT["grid"] = jax.jit(lambda *a: concentrated_loglik(stats(*a)))
-        _JIT["smooth"] = jax.jit(jax.vmap(one_smooth, in_axes=(None, 0, 0, 0, None, 0, 0, 0, 0,
-                                                               0, None)))
+        # the problems (and the grid's points) vmapped as the last axes: see `_kalman`
+        batched = (None, -1, -1, -1, None, -1, -1, -1, -1, -1, None)
+        stats = jax.vmap(one_stats, in_axes=batched[:5] + (None,) + batched[6:])
+
+        def grid(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
+            # Q (M, G, n, n), R (G, m)
+            Q, R = jnp.moveaxis(Q, (0, 1), (-1, -2)), R.T
+            a = [last(x) for x in (phase, omega, Z, MK, u, m0)]
+            return concentrated_loglik(stats(F, Q, *a[:2], rate, R, *a[2:], P0))
+
+        def smoothed(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
+            a = [last(x) for x in (Q, phase, omega, R, Z, MK, u, m0)]
+            return jax.vmap(one_smooth, in_axes=batched)(F, *a[:3], rate, *a[3:], P0)
+
+        mesh = Mesh(np.array(jax.devices()), ("b",))
+        b, r = PartitionSpec("b"), PartitionSpec()
+        spread = functools.partial(jax.shard_map, mesh=mesh, out_specs=b, check_vma=False)
+        _JIT["grid"] = jax.jit(spread(grid, in_specs=(r, b, b, b, r, r, b, b, b, b, r)))
+        _JIT["smooth"] = jax.jit(spread(smoothed, in_specs=(r, b, b, b, r, b, b, b, b, b, r)))
     return _JIT
 
 
@@ -113,13 +133,13 @@ def _active_window(z, u, mask, dt, lengths=None, omega=None) -> np.ndarray:
 def _spread(*arrays):
     """The arrays (batch first) on every CPU device, split along the batch (padded with
     copies of the last problem to a multiple of the device count): XLA then runs each
-    device's share of the vmapped loop on its own core. Returns the arrays and the batch."""
+    device's share of the problems on its own core. Returns the arrays and the batch."""
     import jax
     from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
     M = arrays[0].shape[0]
     devices = jax.devices()
-    if len(devices) < 2 or M < 2:
+    if len(devices) < 2:
         return [jax.numpy.asarray(a) for a in arrays], M
     pad = (-M) % len(devices)
     sharding = NamedSharding(Mesh(np.array(devices), ("b",)), PartitionSpec("b"))
@@ -211,7 +231,8 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
         params = [gm[b] for gm, b in zip(grid, best)]
     Q = np.stack([noise(fc, fh, w0, g)[0] for (fc, fh, g), w0 in zip(params, omega0)])
     R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
-    chunk = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))
+    most = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))  # problems per call at most
+    chunk = -(-M // -(-M // most))  # as many per call as that allows, in calls of one size
     parts = []
     for a in range(0, M, chunk):
         s = slice(a, a + chunk)
