@@ -6,10 +6,12 @@ the flights' paths (only their names) nor the fitted parameters of the runner-up
 model (the `simulation` block fits the verdict's alone). So both augmented models are fitted
 again here, jointly on the training flights, as the diagnosis's simulation block fits the
 verdict's (`fwid.diagnosis._simulation`): the flights come from `--train`, or from the
-`method.train_paths` that `fwid diagnose --out` now records. The models' extra inputs that
-the designed control cannot drive (the other axis's states, the flapping frequency, the
-lagging part of the states, the time) are held at zero in the prediction: effects acting only
-through them are not told apart by this input, and the output says so.
+`method.train_paths` that `fwid diagnose --out` now records. `unsteady-aero`'s lagging part
+of the states, a prepared input in the fit, is made from the model's own simulated states in
+the prediction (`fwid.diagnosis._lag_states`), so the designed control drives it. The extra
+inputs it cannot drive (the other axis's states, the flapping frequency, the time) are held
+at zero: effects acting only through them are not told apart by this input, and the output
+says so.
 """
 
 from __future__ import annotations
@@ -151,13 +153,15 @@ def control_map(model, axis: str, variant_of_control):
 
 def discriminating_models(axis: str, pair, flights, say=None):
     """The two augmented models of `pair` (`(effect, variant)`), each fitted jointly on
-    `flights` from the baseline's joint fit; their control maps; what is held at zero; the
-    constants and the baseline's R."""
+    `flights` from the baseline's joint fit (`unsteady-aero`'s with its lags as states,
+    `lag_states`); their control maps; what is held at zero; the constants and the
+    baseline's R."""
     import warnings
 
     import numpy as np
 
     from fwid.diagnosis._augment import augment
+    from fwid.diagnosis._lag_states import lag_states
     from fwid.identification import identify
 
     if say:
@@ -179,6 +183,8 @@ def discriminating_models(axis: str, pair, flights, say=None):
             ident = identify([prepare(f) for f in flights], model.with_params(fitted),
                              joint=True, start="model")
             m = ident.model.with_params({k: 0.0 for k in ident.model.local})
+            if name == "unsteady-aero":  # the lagging part from the simulated states
+                m = lag_states(m, axis, float(variant))
             models.append(m)
             shift = variant if name == "actuator-dynamics" else (
                 ("delay", -float(variant)) if name == "time-offset" else None)
