@@ -200,6 +200,27 @@ def discriminating_models(axis: str, pair, flights, say=None):
     return models, maps, held, consts, np.asarray(base.fit.R)
 
 
+def load_maps(models, maps, consts):
+    """Each model's `(t, u, y) -> (n, loads)`: its force model (Eqs. 1-6 with the effect's
+    terms) along the trajectory `y` of its outputs for the control `u` (through its control
+    map), the lag states of `unsteady-aero`'s model made from `y` as the diagnosis makes
+    the lag inputs from the measured states (`fwid.diagnosis._lag_states.states_along`)."""
+    import jax
+    import jax.numpy as jnp
+
+    from fwid.diagnosis._lag_states import states_along
+
+    c = {k: jnp.asarray(v, dtype=float) for k, v in consts.items()}
+
+    def one(model, inputs):
+        def loads(t, u, y):
+            x = states_along(model, y, float(t[1] - t[0]))
+            return jax.vmap(lambda xk, uk: model.forces(xk, uk, model.params, c))(
+                x, inputs(t, u))
+        return loads
+    return [one(m, mp) for m, mp in zip(models, maps)]
+
+
 def discriminate(args) -> int:
     from fwid.design._design import check_limits
 

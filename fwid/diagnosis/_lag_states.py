@@ -93,3 +93,35 @@ def lag_states(model: GreyBoxModel, axis: str, tau: float) -> GreyBoxModel:
         free=model.free, constants=model.constants,
         forces=None if model.forces is None else wrap(model.forces, False),
         force_names=model.force_names, local=model.local, name=model.name + "(lag states)")
+
+
+def _lagged(x, dt: float, tau: float):
+    """`x` through the first-order lag of `_catalogue.lagged` (the same recursion, in JAX:
+    `y_k = a y_k-1 + (1 - a) (x_k + x_k-1) / 2`, started steady)."""
+    import jax
+
+    a = np.exp(-dt / tau)
+
+    def step(y, xs):
+        y = a * y + (1.0 - a) * 0.5 * (xs[0] + xs[1])
+        return y, y
+    _, ys = jax.lax.scan(step, x[0], (x[:-1], x[1:]))
+    return jnp.concatenate([x[:1], ys])
+
+
+def states_along(model: GreyBoxModel, y, dt: float):
+    """The full state of `model` along a trajectory `y` `(n, outputs)` of its outputs, for a
+    model whose first states are its outputs (the lon/lat models and their augmentations):
+    `y`, then for a `lag_states` model its lag states, the lagged states through the lag
+    `augment` prepares the lag inputs with (`_catalogue.lagging_part` plus the state).
+
+    **Returns:** `(n, states)`.
+    """
+    n = len(model.outputs)
+    if model.states[:n] != model.outputs:
+        raise ValueError(f"states_along: {model.name}'s first states are not its outputs")
+    if len(model.states) == n:
+        return y
+    f = model.f
+    z = jnp.stack([_lagged(y[:, s], dt, f.tau) for s in f.src], axis=1)
+    return jnp.concatenate([y, z], axis=1)

@@ -75,3 +75,32 @@ def test_a_discriminating_design_drives_the_lag_terms(setup):
     assert d.distance == pytest.approx(np.einsum("ki,ij,kj->", ya - yb, W, ya - yb), rel=1e-9)
     assert d.distance > 10.0  # many noise variances: a flight would tell them apart
     assert d.distance >= d.distance_3211 > 0
+
+
+def test_the_loads_along_a_trajectory_are_the_input_lag_models_loads(setup):
+    # `states_along` + the lag-state model's force model = the input-lag model's force model
+    # fed `lagging_part` of the trajectory (numpy, the diagnosis's filter): what the loads
+    # criterion of the discriminating design compares
+    from fwid.diagnosis._lag_states import states_along
+    from fwid.simulation._simulate import simulate_forces
+
+    model, _, consts, _ = setup
+    inner = lag_states(model, "lon", TAU)
+    t = np.linspace(0.0, 3.0, 151)
+    de = 0.1 * np.sign(np.sin(2 * np.pi * 0.7 * t))
+    y = _simulate(inner, t, de[:, None], consts)[1] + 0.01 * np.sin(7 * t)[:, None]
+    x = np.asarray(states_along(inner, y, t[1] - t[0]))
+    assert x.shape == (t.size, 7)
+    z4 = np.zeros((t.size, 4))
+    got = np.asarray(simulate_forces(inner, x, fwid.Experiment(t, de[:, None], z4,
+                                                               x0=np.zeros(7), consts=consts)))
+    lagp = np.stack([lagging_part(y[:, model.states.index(s)], t[1] - t[0], TAU)
+                     for s in ("u", "w", "q")], axis=1)
+
+    def loads(lag_inputs):
+        exp = fwid.Experiment(t, np.column_stack([de, lag_inputs]), z4, x0=np.zeros(4),
+                              consts=consts)
+        return np.asarray(simulate_forces(model, y, exp))
+    want = loads(lagp)
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12 * np.max(np.abs(want)))
+    assert np.max(np.abs(want - loads(0 * lagp))) > 1e-3 * np.max(np.abs(want))
