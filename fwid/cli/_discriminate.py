@@ -252,13 +252,16 @@ def discriminate(args) -> int:
     flights = fwid.data.build_flights(records)
     say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
     models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
+    by = getattr(args, "discriminate_by", "loads")
+    loads = load_maps(models, maps, consts) if by == "loads" else (None, None)
     d = fwid.design_discriminating(
         models[0], models[1], consts=consts, R=R, amplitude=args.amplitude,
         duration=args.duration, quiet=args.quiet, inputs_a=maps[0], inputs_b=maps[1],
         parametrisation=args.parametrisation, switch_rate=args.switch_rate, rate=args.rate,
         attitude={"lon": "theta", "lat": "phi"}[axis],
         attitude_bound="3211" if args.attitude_limit is None else 0.8 * args.attitude_limit,
-        restarts=args.restarts, seed=args.seed, progress=say or False)
+        restarts=args.restarts, seed=args.seed, progress=say or False, loads_a=loads[0],
+        loads_b=loads[1])
     control = {"lon": "de", "lat": "dr"}[axis]
     info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
             "refit_on": [f.name for f in flights], "held": held,
