@@ -20,6 +20,7 @@ programs in a per-user cache folder (`FWID_JAX_CACHE`; README, 'Compilation cach
 """
 
 import importlib
+from importlib.metadata import PackageNotFoundError as _NotInstalled
 from importlib.metadata import version as _version
 
 from ._errors import (
@@ -33,7 +34,23 @@ from ._errors import (
 )
 from ._jax_setup import on_jax_import as _on_jax_import
 
-__version__ = _version("fwid")
+
+def _own_version() -> str:
+    """The installed distribution's version; from a source checkout that is not installed
+    (on `PYTHONPATH`), the `version` line of its `pyproject.toml`."""
+    try:
+        return _version("fwid")
+    except _NotInstalled:
+        import re
+        from pathlib import Path
+
+        toml = Path(__file__).resolve().parents[1] / "pyproject.toml"
+        found = re.search(r'^version\s*=\s*"([^"]+)"', toml.read_text(), re.M) \
+            if toml.is_file() else None
+        return found.group(1) if found else "0+unknown"
+
+
+__version__ = _own_version()
 
 _on_jax_import()
 

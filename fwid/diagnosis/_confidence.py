@@ -33,6 +33,16 @@ probability at least `1 - LEVEL` (asymptotically) it holds the best explanation.
 resamples whole scoring blocks (a block bootstrap of the samples with one-second blocks): the
 residual's colour stays inside a block, and given the fit, blocks are taken as independent, as
 the selection's t test does.
+
+The set answers "which explanations could be the best", and a larger explanation that holds
+a kept smaller one and fits the blocks about as well could always be: it is kept by the MCS
+even when its extra effects earn nothing, because the best of many nested models is one of
+them by chance. The set is therefore made parsimonious (`parsimonious`): an explanation is
+dropped when it holds a kept smaller one (`none` is held by all) and is not significantly
+better than it, by the one-sided block-bootstrap test of the mean charged loss difference at
+the same `LEVEL`. Every effect of a kept explanation has then earned its place against the
+explanations without it, and a pair is reported only when the flights show both effects.
+No setting is added: the test, its level and its bootstrap are the set's own.
 """
 
 from __future__ import annotations
@@ -156,7 +166,8 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
     gaining = sorted((e for e in candidates if not e.probe and first[e.name].mean > 0),
                      key=lambda e: -first[e.name].mean)[:pair_pool]
     # an entry built on states' rates only first (`_selection.py`: after another effect it
-    # picks up that effect's leftover misfit on the other loads)
+    # picks up that effect's leftover misfit on the other loads, significantly and by more
+    # than its charge: measured on flap-frequency flights, `tests/diagnosis/test_diagnose.py`)
     groups = [tuple(p) for p in itertools.combinations(gaining, 2) if not p[1].rates]
     if len(chosen) > 1 and tuple(chosen) not in groups:
         groups.append(tuple(chosen))
@@ -175,14 +186,45 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
     return kept
 
 
+def better_p_value(larger: np.ndarray, smaller: np.ndarray, resamples: int = RESAMPLES,
+                   seed: int = 0) -> float:
+    """The one-sided block-bootstrap p value of "`larger` is no better than `smaller`": the
+    share of centred bootstrap means of the per-block difference `larger - smaller` (charged
+    losses) at or below its observed mean. Small when the larger explanation's loss is
+    significantly lower."""
+    d = np.asarray(larger, dtype=float) - np.asarray(smaller, dtype=float)
+    n = d.size
+    rng = np.random.default_rng(seed)
+    counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples) / n
+    boot = counts @ (d - d.mean())
+    return float(np.mean(boot <= d.mean()))
+
+
+def parsimonious(kept: Sequence[Explanation], level: float = LEVEL,
+                 resamples: int = RESAMPLES) -> list[Explanation]:
+    """`kept` without every explanation that holds a kept smaller one and is not
+    significantly better than it (`better_p_value` at `level`; module docstring), in the
+    order of `kept`. Smaller explanations are judged first, so each is compared only with
+    explanations that stay."""
+    stays: list[Explanation] = []
+    for x in sorted(kept, key=lambda x: len(x.effects)):
+        own = set(x.names)
+        subs = [y for y in stays if set(y.names) < own]
+        if all(better_p_value(x.loss + x.charge, y.loss + y.charge, resamples) < level
+               for y in subs):
+            stays.append(x)
+    return [x for x in kept if any(x is y for y in stays)]
+
+
 def confidence_set(found: list[Explanation], level: float = LEVEL,
                    resamples: int = RESAMPLES) -> list[Explanation]:
-    """The explanations whose MCS p value is at least `level`, best (least mean held-out
-    loss) first; every explanation's `p_value` is set."""
+    """The explanations whose MCS p value is at least `level`, made `parsimonious`, best
+    (least mean held-out loss) first; every explanation's `p_value` is set."""
     p = mcs_p_values(np.stack([x.loss + x.charge for x in found], axis=1), resamples)
     for x, pv in zip(found, p):
         x.p_value = float(pv)
-    return sorted((x for x in found if x.p_value >= level), key=lambda x: x.mean_loss)
+    kept = sorted((x for x in found if x.p_value >= level), key=lambda x: x.mean_loss)
+    return parsimonious(kept, level, resamples)
 
 
 def as_rows(kept: Sequence[Explanation], base: Explanation) -> list[dict]:

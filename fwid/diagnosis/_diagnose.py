@@ -17,7 +17,8 @@ from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
 from ._probes import PROBES, drivers
 from ._provenance import provenance
 from ._process_noise import process_noise as fit_process_noise
-from ._simulation import SimulationGap, simulation_gap, start_baseline
+from ._augment import IN_EOM
+from ._simulation import SimulationGap, simulation_gap, start_augmented, start_baseline
 from ._selection import ALPHA, MIN_GAIN, forward_select
 from ._significance import BLOCK_S, cross_fit_folds
 from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
@@ -255,7 +256,18 @@ def diagnose(
 
     say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
         f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")
-    sel = forward_select(engine, halves, tuple(catalogue) + tuple(probes), alpha, min_gain)
+    # the augmented model's fit for the first round's leader starts at once, beside the later
+    # rounds: it is the simulation's model whenever the verdict is that effect alone
+    early: dict[str, object] = {}
+
+    def on_first(e: Effect) -> None:
+        if simulation and e.name in IN_EOM and e.name in {c.name for c in catalogue}:
+            effects = [(e.name, unwrap(engine.choose(train_idx, (), e, sigma2)))]
+            early[repr(effects)] = start_augmented(train, test, axis, effects, cutoff,
+                                                   baseline)
+
+    sel = forward_select(engine, halves, tuple(catalogue) + tuple(probes), alpha, min_gain,
+                         on_first=on_first)
 
     say("re-fitting on the training flights, scoring on the test flights")
 
@@ -440,7 +452,8 @@ def diagnose(
     if simulation:
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
             + " fitted by output error on the training flights, simulated on the test flights")
-        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result())
+        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result(),
+                             augmented=early.get(repr(list(in_sim))))
 
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,

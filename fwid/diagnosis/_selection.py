@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from ._attribution import Engine, Model
 from ._catalogue import Effect
@@ -92,7 +92,11 @@ def passes(e: Effect, ev: Evidence, level: float, min_gain: float) -> bool:
 
 def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effect],
                    alpha: float = ALPHA, min_gain: float = MIN_GAIN,
-                   max_effects: int = MAX_EFFECTS) -> Selection:
+                   max_effects: int = MAX_EFFECTS,
+                   on_first: Callable[[Effect], None] | None = None) -> Selection:
+    """Forward selection over `catalogue` (see the module docstring); `on_first(effect)` is
+    called with the first round's leader as soon as it is chosen (the diagnosis starts the
+    augmented model's fit for it then, beside the later rounds)."""
     models: list[Model] = [() for _ in halves]
     remaining = list(catalogue)
     chosen, rounds = [], []
@@ -110,6 +114,8 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
         best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
         rounds.append((lv, ev, best.name))
         chosen.append((best, ev[best.name]))
+        if on_first is not None and len(chosen) == 1:
+            on_first(best)
         models = [m + ((best, v),) for m, v in zip(models, ev[best.name].variants)]
         remaining.remove(best)
     return Selection(chosen, models, rounds)

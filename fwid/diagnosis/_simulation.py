@@ -65,34 +65,72 @@ def start_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     return future
 
 
+def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
+                  effects: Sequence[tuple[str, object]], cutoff: float,
+                  baseline: Identification) -> tuple[Identification | None, str | None, list]:
+    """The model augmented with `effects` fitted jointly on `train` from the `baseline`'s
+    estimates (the new terms at zero: the quadratic terms' equation-error start can make the
+    simulation blow up), validated on `test`. It may still miss part of the effect, so its
+    fit warnings (coloured residuals, slow convergence) are expected: kept in its fits
+    (`quiet_fits`), not issued.
+
+    **Returns:** `(identification, failed, warnings)`: the identification (`None` when no
+    effect has a form in the EOM, or the fit failed), why it failed (recorded, not raised)
+    and its fits' warnings.
+    """
+    base = get_model(axis)
+    model, prepare, left_out = augment(axis, effects, cutoff)
+    in_eom = [n for n, _ in effects if n not in left_out]
+    if not in_eom:
+        return None, None, []
+    fitted = {k: float(v) for k, v in baseline.model.params.items() if k not in base.local}
+    try:
+        with quiet_fits():
+            after = identify([prepare(f) for f in train], model.with_params(fitted),
+                             validate=[prepare(f) for f in test], joint=True, cutoff=cutoff,
+                             start="model")
+    except (FitDivergedError, np.linalg.LinAlgError) as exc:
+        return None, (f"the model with {' + '.join(in_eom)} in the EOM could not be fitted "
+                      f"and simulated ({exc}): the simulated gap is not measured"), []
+    return after, None, [m for f in after.fits for m in f.warnings]
+
+
+def start_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
+                    effects: Sequence[tuple[str, object]], cutoff: float,
+                    baseline: Future) -> Future:
+    """`fit_augmented` in a worker thread, once `baseline` (`start_baseline`'s future) is
+    done: started when the selection's first round has its leader, it runs beside the rest
+    of the selection, and `simulation_gap` takes its result when the verdict's effects are
+    `effects` (else it is left unused)."""
+    pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-augmented")
+    future = pool.submit(lambda: fit_augmented(train, test, axis, list(effects), cutoff,
+                                               baseline.result()))
+    pool.shutdown(wait=False)
+    return future
+
+
 def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                    effects: Sequence[tuple[str, object]], cutoff: float = 5.0,
-                   baseline: Identification | None = None) -> SimulationGap:
+                   baseline: Identification | None = None,
+                   augmented: Future | None = None) -> SimulationGap:
     """Fit the baseline (or take `baseline`, `fit_baseline`'s result) and the model augmented
-    with `effects` (`(name, variant)` pairs) on `train`, simulate both on `test`;
+    with `effects` (`(name, variant)` pairs; or take `augmented`, `start_augmented`'s future
+    for the same effects) on `train`, simulate both on `test`;
     `shrink_pct` is the drop of the RMS of the simulated states,
     `100 (1 - sqrt(mean_s (after_s / before_s)^2))` over the states."""
     base = get_model(axis)
     states = list(base.outputs)
-    model, prepare, left_out = augment(axis, effects, cutoff)
+    _, prepare, left_out = augment(axis, effects, cutoff)
     in_eom = [n for n, _ in effects if n not in left_out]
     before_id = fit_baseline(train, test, axis, cutoff) if baseline is None else baseline
-    # the augmented model may still miss part of the effect, so its fit may warn (coloured
-    # residuals, slow convergence): expected here, kept in the summary rather than printed
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        after_id, failed = None, None
-        if in_eom:  # from the baseline's estimates, the new terms at zero: the quadratic
-            # terms' equation-error start can make the simulation blow up
-            fitted = {k: float(v) for k, v in before_id.model.params.items()
-                      if k not in base.local}
-            try:
-                after_id = identify([prepare(f) for f in train], model.with_params(fitted),
-                                    validate=[prepare(f) for f in test], joint=True,
-                                    cutoff=cutoff, start="model")
-            except (FitDivergedError, np.linalg.LinAlgError) as exc:  # recorded, not raised
-                failed = (f"the model with {' + '.join(in_eom)} in the EOM could not be "
-                          f"fitted and simulated ({exc}): the simulated gap is not measured")
+    if augmented is not None:
+        after_id, failed, fit_warnings = augmented.result()
+        caught = []
+    else:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            after_id, failed, fit_warnings = fit_augmented(train, test, axis, effects, cutoff,
+                                                           before_id)
     before = _rms_by_state(before_id, states)
     after = _rms_by_state(after_id, states) if after_id is not None else dict(before)
     base_ok = bool(all(f.converged for f in before_id.fits))
@@ -114,6 +152,7 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
         "converged_baseline": base_ok,
         "converged_augmented": augmented_ok,
         "warnings": sorted({str(w.message).split(": ", 1)[-1] for w in caught}
+                           | {m.split(": ", 1)[-1] for m in fit_warnings}
                            | {m.split(": ", 1)[-1] for f in before_id.fits
                               for m in f.warnings}),
         **({"message": failed} if failed else {}),

@@ -100,7 +100,8 @@ def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarra
     spline = interpolate.CubicSpline(t_log, lowpass(t_log, gyro, 0.45 / dt), axis=0,
                                      extrapolate=False)
     if given is None:
-        grid = np.arange(t_log[0], t_log[-1] + 1e-9, dt)
+        # inside the log: a last point past its end by round-off is NaN in the spline
+        grid = np.minimum(np.arange(t_log[0], t_log[-1] + 1e-9, dt), t_log[-1])
         cut = COARSE_CUTOFF * (f0 if np.isfinite(f0) and f0 > 0 else 12.0)
         a = lowpass(t, w - w.mean(0), cut)
         b = lowpass(grid, spline(grid) - spline(grid).mean(0), cut)

@@ -7,7 +7,10 @@ import pytest
 from scipy import stats
 
 import fwid
-from fwid.diagnosis._confidence import LEVEL, mcs_p_values
+from types import SimpleNamespace
+
+from fwid.diagnosis._confidence import (LEVEL, Explanation, better_p_value, confidence_set,
+                                        mcs_p_values, parsimonious)
 from fwid.report import diagnosis_summary
 
 
@@ -42,6 +45,44 @@ def test_equally_good_models_stay_together():
     losses[:, 2] += 5.0
     p = mcs_p_values(losses, resamples=1000)
     assert p[0] >= LEVEL and p[1] >= LEVEL and p[2] < 0.01
+
+
+def test_the_one_sided_p_value_is_the_normal_test_of_the_mean_difference():
+    rng = np.random.default_rng(3)
+    n = 300
+    smaller = rng.normal(size=n)
+    larger = smaller - 0.1 + rng.normal(size=n)  # a little better
+    d = larger - smaller
+    z = d.mean() / (d.std(ddof=1) / math.sqrt(n))
+    assert better_p_value(larger, smaller, resamples=4000) == pytest.approx(
+        stats.norm.cdf(z), abs=0.03)
+    assert better_p_value(smaller - 1.0, smaller) < 0.001  # clearly better
+    assert better_p_value(smaller + 1.0, smaller) > 0.999  # clearly worse
+
+
+def _explanation(names, loss):
+    return Explanation(tuple(SimpleNamespace(name=n, rates=False) for n in names), loss)
+
+
+def test_a_larger_explanation_stays_only_when_it_is_significantly_better():
+    """`A + B` holds `A`: dropped when `B` adds nothing beyond the noise (although the MCS,
+    which cannot reject either, keeps both), kept when it is clearly better; an explanation
+    that holds no kept one (`C`) is never dropped."""
+    rng = np.random.default_rng(4)
+    base = rng.normal(size=80)
+    a = _explanation(["A"], base - 0.5)
+    ab_noise = _explanation(["A", "B"], base - 0.5 + 0.05 * rng.normal(size=80))
+    ab_real = _explanation(["A", "B"], base - 1.0 + 0.05 * rng.normal(size=80))
+    c = _explanation(["C"], base - 0.5 + 0.05 * rng.normal(size=80))
+    assert [x.names for x in parsimonious([ab_noise, a, c])] == [["A"], ["C"]]
+    assert [x.names for x in parsimonious([ab_real, a, c])] == [["A", "B"], ["A"], ["C"]]
+    # none is held by every explanation: one that is not significantly better goes
+    none = _explanation([], base)
+    e = 0.05 * rng.normal(size=80)
+    charge = _explanation(["A"], base).charge  # the gain an effect must earn
+    weak = _explanation(["A"], base + e - e.mean() - charge - 0.001)  # a fraction of its noise
+    kept = confidence_set([none, weak], resamples=1000)
+    assert weak.p_value >= LEVEL and [x.names for x in kept] == [[]]
 
 
 def test_the_set_of_a_diagnosis(effect_flights):
