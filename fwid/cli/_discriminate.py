@@ -264,7 +264,7 @@ def discriminate(args) -> int:
         loads_b=loads[1])
     control = {"lon": "de", "lat": "dr"}[axis]
     info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
-            "refit_on": [f.name for f in flights], "held": held,
+            "refit_on": [f.name for f in flights], "held": held, "compared": by,
             "R": "the baseline's joint fit (Eq. 11)"}
     written = write_discrimination(d, control, info, Path(args.out))
     ratio = d.to_json()["criterion"]["ratio"]
