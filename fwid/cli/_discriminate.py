@@ -11,7 +11,9 @@ of the states, a prepared input in the fit, is made from the model's own simulat
 the prediction (`fwid.diagnosis._lag_states`), so the designed control drives it. The extra
 inputs it cannot drive (the other axis's states, the flapping frequency, the time) are held
 at zero: effects acting only through them are not told apart by this input, and the output
-says so.
+says so. By default (`--discriminate-by loads`) the design compares the two models' predicted
+loads along either model's trajectory (`load_maps`), as the diagnosis compares the effects on
+the loads of the flown flight; `--discriminate-by outputs` compares their predicted states.
 """
 
 from __future__ import annotations
@@ -265,7 +267,9 @@ def discriminate(args) -> int:
     control = {"lon": "de", "lat": "dr"}[axis]
     info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
             "refit_on": [f.name for f in flights], "held": held, "compared": by,
-            "R": "the baseline's joint fit (Eq. 11)"}
+            **({"S": "each load's standard deviation along model a's prediction of the "
+                     "reference 3211"} if by == "loads" else
+               {"R": "the baseline's joint fit (Eq. 11)"})}
     written = write_discrimination(d, control, info, Path(args.out))
     ratio = d.to_json()["criterion"]["ratio"]
     print(f"fwid: input telling {pair[0][0]} from {pair[1][0]}: expected difference "
