@@ -208,6 +208,12 @@ DISC_TRAIN, DISC_TEST, DISC_DURATION = 2, 2, 3.0
 #: (a 50 Hz grid for the optimisation, steps at 10 Hz as `fwid design`'s default).
 DISC_AMPLITUDE = synth_sim.DEFAULT_AMPLITUDE["lon"]
 DISC_DESIGN = dict(rate=50.0, restarts=3, iterations=150)
+#: What the design compares (`--discriminate-by`): the two models' predicted loads along either
+#: model's trajectory, or their predicted outputs (`fwid design --discriminate-by`). On seeds
+#: 100-103 (11 ambiguous), decisive and right after the designed flight: loads 1, outputs 0
+#: (after a 3211: 0); right verdict: loads 2, outputs 4 (3211: 3) -- too few to tell; loads
+#: is what the diagnosis compares.
+DISC_BY = "loads"
 #: The added flight's length (`None`: that of the training flights; `--added-duration`). A
 #: 6 s one did no better on seeds 100-101: decisive and right 1 of 6 designed, 1 of 6 3211.
 ADDED_DURATION = None
@@ -266,7 +272,7 @@ def run_discrimination(seeds, out: Path, log) -> dict:
     models re-fitted, `fwid design --discriminate`'s code), fly it with the true effect, add
     it to the training flights and diagnose again; and, as the control, fly a 3211 of the
     same amplitude and length instead (same seed, same noise)."""
-    from fwid.cli._discriminate import close_pair, discriminating_models
+    from fwid.cli._discriminate import close_pair, discriminating_models, load_maps
 
     rows = []
     for true, rival, strength in DISC_CASES:
@@ -298,11 +304,12 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             models, maps, held, consts, R = discriminating_models("lon", pair, train)
             added = ADDED_DURATION or DISC_DURATION
             row["held"] = held
+            loads = load_maps(models, maps, consts) if DISC_BY == "loads" else (None, None)
             try:
                 disc = fwid.design_discriminating(
                     models[0], models[1], consts=consts, R=R, amplitude=DISC_AMPLITUDE,
                     duration=added, quiet=QUIET, inputs_a=maps[0], inputs_b=maps[1],
-                    attitude="theta", **DISC_DESIGN)
+                    attitude="theta", loads_a=loads[0], loads_b=loads[1], **DISC_DESIGN)
             except fwid.InputError as exc:
                 row["failed"] = str(exc)
                 rows.append(row)
@@ -333,6 +340,7 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             "flights": {"train": DISC_TRAIN, "test": DISC_TEST, "duration_s": DISC_DURATION,
                         "added_duration_s": ADDED_DURATION or DISC_DURATION,
                         "amplitude_rad": DISC_AMPLITUDE}, "design": DISC_DESIGN,
+            "discriminate_by": DISC_BY,
             "runs": len(rows), "ambiguous_before": len(amb), "design_failed": len(amb) - len(flown),
             "decisive_right_designed": sum(bool(r.get("decisive_right_designed")) for r in amb),
             "decisive_right_3211": sum(bool(r.get("decisive_right_3211")) for r in amb),
@@ -382,7 +390,8 @@ def markdown_discrimination(disc: dict) -> str:
              f"(3211s, {fl['amplitude_rad']:g} rad) per case, the effect weak (strength "
              "below). Ambiguous: the confidence set keeps explanations led by two or more "
              "catalogue effects. Then the input telling the set's first two apart is designed "
-             "(both augmented models re-fitted on the training flights), flown with the true "
+             "(both augmented models re-fitted on the training flights; compared by their "
+             f"predicted {disc.get('discriminate_by', 'outputs')}), flown with the true "
              "effect and added to the training flights "
              f"({fl.get('added_duration_s', fl['duration_s']):g} s long); the control adds a "
              "window-filling "
@@ -415,6 +424,7 @@ def markdown_discrimination(disc: dict) -> str:
 
 
 def main(argv=None) -> int:
+    global ADDED_DURATION, DISC_BY
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="3 seeds (default 8)")
     ap.add_argument("--seeds", type=int, default=None, help="number of seeds")
@@ -425,9 +435,11 @@ def main(argv=None) -> int:
     ap.add_argument("--added-duration", type=float, default=None,
                     help="length of the added (designed or 3211) flight [s]; default that of "
                          "the training flights")
+    ap.add_argument("--discriminate-by", choices=("loads", "outputs"), default=DISC_BY,
+                    help="what the discriminating design compares (default %(default)s)")
     args = ap.parse_args(argv)
-    global ADDED_DURATION
     ADDED_DURATION = args.added_duration
+    DISC_BY = args.discriminate_by
     seeds = list(range(args.seeds or (3 if args.quick else 8)))
     disc_seeds = [args.first_seed + k for k in range(args.seeds or (1 if args.quick else 4))]
     sys.path.insert(0, str(Path(__file__).parent))

@@ -6,10 +6,14 @@ the flights' paths (only their names) nor the fitted parameters of the runner-up
 model (the `simulation` block fits the verdict's alone). So both augmented models are fitted
 again here, jointly on the training flights, as the diagnosis's simulation block fits the
 verdict's (`fwid.diagnosis._simulation`): the flights come from `--train`, or from the
-`method.train_paths` that `fwid diagnose --out` now records. The models' extra inputs that
-the designed control cannot drive (the other axis's states, the flapping frequency, the
-lagging part of the states, the time) are held at zero in the prediction: effects acting only
-through them are not told apart by this input, and the output says so.
+`method.train_paths` that `fwid diagnose --out` now records. `unsteady-aero`'s lagging part
+of the states, a prepared input in the fit, is made from the model's own simulated states in
+the prediction (`fwid.diagnosis._lag_states`), so the designed control drives it. The extra
+inputs it cannot drive (the other axis's states, the flapping frequency, the time) are held
+at zero: effects acting only through them are not told apart by this input, and the output
+says so. By default (`--discriminate-by loads`) the design compares the two models' predicted
+loads along either model's trajectory (`load_maps`), as the diagnosis compares the effects on
+the loads of the flown flight; `--discriminate-by outputs` compares their predicted states.
 """
 
 from __future__ import annotations
@@ -151,13 +155,15 @@ def control_map(model, axis: str, variant_of_control):
 
 def discriminating_models(axis: str, pair, flights, say=None):
     """The two augmented models of `pair` (`(effect, variant)`), each fitted jointly on
-    `flights` from the baseline's joint fit; their control maps; what is held at zero; the
-    constants and the baseline's R."""
+    `flights` from the baseline's joint fit (`unsteady-aero`'s with its lags as states,
+    `lag_states`); their control maps; what is held at zero; the constants and the
+    baseline's R."""
     import warnings
 
     import numpy as np
 
     from fwid.diagnosis._augment import augment
+    from fwid.diagnosis._lag_states import lag_states
     from fwid.identification import identify
 
     if say:
@@ -179,6 +185,8 @@ def discriminating_models(axis: str, pair, flights, say=None):
             ident = identify([prepare(f) for f in flights], model.with_params(fitted),
                              joint=True, start="model")
             m = ident.model.with_params({k: 0.0 for k in ident.model.local})
+            if name == "unsteady-aero":  # the lagging part from the simulated states
+                m = lag_states(m, axis, float(variant))
             models.append(m)
             shift = variant if name == "actuator-dynamics" else (
                 ("delay", -float(variant)) if name == "time-offset" else None)
@@ -192,6 +200,27 @@ def discriminating_models(axis: str, pair, flights, say=None):
     consts = {k: float(np.asarray(v)) for k, v in base.consts.items()
               if k in base.model.constants}
     return models, maps, held, consts, np.asarray(base.fit.R)
+
+
+def load_maps(models, maps, consts):
+    """Each model's `(t, u, y) -> (n, loads)`: its force model (Eqs. 1-6 with the effect's
+    terms) along the trajectory `y` of its outputs for the control `u` (through its control
+    map), the lag states of `unsteady-aero`'s model made from `y` as the diagnosis makes
+    the lag inputs from the measured states (`fwid.diagnosis._lag_states.states_along`)."""
+    import jax
+    import jax.numpy as jnp
+
+    from fwid.diagnosis._lag_states import states_along
+
+    c = {k: jnp.asarray(v, dtype=float) for k, v in consts.items()}
+
+    def one(model, inputs):
+        def loads(t, u, y):
+            x = states_along(model, y, float(t[1] - t[0]))
+            return jax.vmap(lambda xk, uk: model.forces(xk, uk, model.params, c))(
+                x, inputs(t, u))
+        return loads
+    return [one(m, mp) for m, mp in zip(models, maps)]
 
 
 def discriminate(args) -> int:
@@ -225,17 +254,22 @@ def discriminate(args) -> int:
     flights = fwid.data.build_flights(records)
     say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
     models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
+    by = getattr(args, "discriminate_by", "loads")
+    loads = load_maps(models, maps, consts) if by == "loads" else (None, None)
     d = fwid.design_discriminating(
         models[0], models[1], consts=consts, R=R, amplitude=args.amplitude,
         duration=args.duration, quiet=args.quiet, inputs_a=maps[0], inputs_b=maps[1],
         parametrisation=args.parametrisation, switch_rate=args.switch_rate, rate=args.rate,
         attitude={"lon": "theta", "lat": "phi"}[axis],
         attitude_bound="3211" if args.attitude_limit is None else 0.8 * args.attitude_limit,
-        restarts=args.restarts, seed=args.seed, progress=say or False)
+        restarts=args.restarts, seed=args.seed, progress=say or False, loads_a=loads[0],
+        loads_b=loads[1])
     control = {"lon": "de", "lat": "dr"}[axis]
     info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
-            "refit_on": [f.name for f in flights], "held": held,
-            "R": "the baseline's joint fit (Eq. 11)"}
+            "refit_on": [f.name for f in flights], "held": held, "compared": by,
+            **({"S": "each load's standard deviation along model a's prediction of the "
+                     "reference 3211"} if by == "loads" else
+               {"R": "the baseline's joint fit (Eq. 11)"})}
     written = write_discrimination(d, control, info, Path(args.out))
     ratio = d.to_json()["criterion"]["ratio"]
     print(f"fwid: input telling {pair[0][0]} from {pair[1][0]}: expected difference "

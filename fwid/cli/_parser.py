@@ -189,6 +189,10 @@ def parser() -> argparse.ArgumentParser:
                    help="instead: the input telling apart the two closest effects of the "
                         "diagnosis in DIAGNOSIS_DIR (diagnosis.json), both models re-fitted on "
                         "its training flights")
+    g.add_argument("--discriminate-by", choices=("loads", "outputs"), default="loads",
+                   help="with --discriminate: compare the two models' predicted loads along "
+                        "either model's trajectory (default; what the diagnosis compares) or "
+                        "their predicted outputs")
     g.add_argument("--train", nargs="+", default=None, metavar="DATA",
                    help="with --discriminate: the diagnosis's training flights (default: the "
                         "paths its diagnosis.json records)")

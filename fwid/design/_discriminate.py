@@ -7,6 +7,12 @@ maximises the expected difference between their predicted outputs, normalised by
 give in favour of the true model, twice over: its expected value under either model is
 `D / 2`), under the same limits as [`fwid.design_input`][].
 
+With `loads_a`, `loads_b` the difference is that of the two models' predicted loads along one
+trajectory, what an equation-error comparison (the diagnosis's) sees on the flown flight:
+`D = 1/2 sum_j sum_k |S^-1 (L_a(x_j,k) - L_b(x_j,k) - mean)|^2`, the trajectory `x_j`
+simulated by either model in turn (the flight is flown by one of them), the mean over the
+flight removed (a flight's trim load is its own), `S` the loads' scale.
+
 A model fitted on small manoeuvres may diverge for a large one (the quadratic terms of
 `nonlinear-aero` in the simulated states, extrapolated). The reference 3211 (the attitude
 bound, and with steps one restart, so that a gradient exists) is the first whose predictions
@@ -52,10 +58,14 @@ class Discrimination(eqx.Module):
     u_3211: np.ndarray
     limits: dict
     settings: dict
+    criterion: str = "outputs"
 
     def to_json(self) -> dict:
-        return {"criterion": {"name": "expected difference of the two models' predicted "
-                                      "outputs, sum_k d_k^T R^-1 d_k",
+        name = ("expected difference of the two models' predicted outputs, sum_k d_k^T R^-1 "
+                "d_k" if self.criterion == "outputs" else
+                "expected difference of the two models' predicted loads along either "
+                "model's trajectory, the flight's mean removed, sum_k d_k^T S^-2 d_k")
+        return {"criterion": {"name": name,
                               "designed": self.distance, "3211": self.distance_3211,
                               "ratio": self.distance / max(self.distance_3211, 1e-300)
                               if np.isfinite(self.distance_3211) else None},
@@ -114,6 +124,9 @@ def design_discriminating(
     iterations: int = 300,
     seed: int = 0,
     progress=False,
+    loads_a: Callable | None = None,
+    loads_b: Callable | None = None,
+    load_scale=None,
 ) -> Discrimination:
     """Design the input that maximises the noise-normalised difference of two models'
     predicted outputs.
@@ -126,6 +139,10 @@ def design_discriminating(
       the others zero.
     - `attitude`, `attitude_bound`: the output whose predicted excursion (by either model) is
       bounded, and the bound (rad; `"3211"`: that of a 3211 of the same amplitude).
+    - `loads_a`, `loads_b`: `(t, u, y) -> (n, loads)`, a model's predicted loads along the
+      trajectory `y` (its outputs) for the control `u`; given both, `D` compares the loads
+      (the module's docstring), `load_scale` (per load; default: the standard deviation of
+      model a's loads along its own prediction of the reference 3211) their scale.
     - the rest as in [`fwid.design_input`][].
 
     **Returns:** a [`fwid.design.Discrimination`][].
@@ -151,8 +168,20 @@ def design_discriminating(
             out.append(simulate(m, exp)[1])
         return out
 
+    by_loads = loads_a is not None and loads_b is not None
+    scale = [None if load_scale is None else jnp.asarray(load_scale, dtype=float)]
+
+    def load_difference(u, ys):
+        out = 0.0
+        for y in ys:
+            d = loads_a(grid.t, u, y) - loads_b(grid.t, u, y)
+            out = out + 0.5 * jnp.sum(((d - jnp.mean(d, axis=0)) / scale[0]) ** 2)
+        return out
+
     def distance(u):
         ya, yb = responses(u)
+        if by_loads:
+            return load_difference(u, (ya, yb)), ya, yb
         d = (ya - yb) @ W.T
         return jnp.sum(d**2), ya, yb
 
@@ -173,6 +202,9 @@ def design_discriminating(
                          "(re-fit it on more flights) before designing with it")
 
     used, ref, unit = reference()
+    if by_loads and scale[0] is None:
+        la = np.asarray(loads_a(grid.t, jnp.asarray(ref), responses(jnp.asarray(ref))[0]))
+        scale[0] = jnp.asarray(np.std(la, axis=0) + 1e-12 * np.max(np.abs(la)) + 1e-300)
     u3211 = input_3211(grid, used)  # the comparison: filling the window
     if att is None or attitude_bound is None:
         bound = None
@@ -236,4 +268,5 @@ def design_discriminating(
                           distance_3211=float(D3), u_3211=u3211, limits=limits,
                           settings={"parametrisation": parametrisation, "rate_hz": rate,
                                     "restarts": restarts, "iterations": iterations,
-                                    "seed": seed})
+                                    "seed": seed},
+                          criterion="loads" if by_loads else "outputs")

@@ -70,3 +70,30 @@ def test_a_model_that_diverges_for_the_3211_gets_a_faster_reference_or_a_smaller
             assert d.distance >= d.distance_3211 > 0
         else:
             assert d.to_json()["criterion"]["ratio"] is None
+
+
+def test_the_loads_criterion_compares_the_loads_along_either_trajectory():
+    # loads L = a x + b u: the models differ in the gain b; the criterion is half the sum over
+    # both predicted trajectories of the squared load difference (mean removed) over S^2
+    ma, mb = _first_order(1.0), _first_order(1.2)
+
+    def loads_of(m):
+        return lambda t, u, y: (m.params["a"] * y[:, 0] + m.params["b"] * u)[:, None]
+    la, lb = loads_of(ma), loads_of(mb)
+    d = fwid.design_discriminating(ma, mb, consts={}, R=[[1e-4]], amplitude=0.5,
+                                   duration=4.0, quiet=1.0, rate=20.0, attitude_bound=None,
+                                   restarts=2, iterations=60, switch_rate=5.0,
+                                   loads_a=la, loads_b=lb, load_scale=[0.1])
+    exp = fwid.Experiment(d.t, d.u, np.zeros(d.t.size), x0=np.zeros(1))
+    ya = np.asarray(fwid.simulate(ma, exp)[1])[:, 0]
+    yb = np.asarray(fwid.simulate(mb, exp)[1])[:, 0]
+    want = 0.0
+    for y in (ya, yb):  # L_a - L_b = (b_a - b_b) u on any trajectory (same a)
+        diff = (-2.0 * y + 1.0 * d.u) - (-2.0 * y + 1.2 * d.u)
+        want += 0.5 * np.sum(((diff - diff.mean()) / 0.1) ** 2)
+    assert d.distance == pytest.approx(want, rel=1e-9)
+    assert d.to_json()["criterion"]["name"].startswith("expected difference of the two "
+                                                       "models' predicted loads")
+    # the load difference is 0.2 u, mean removed: the best input swings between the limits
+    assert d.distance >= d.distance_3211 > 0
+    assert np.mean(np.abs(d.u[d.t > 1.0])) > 0.8 * 0.5

@@ -1,0 +1,106 @@
+"""`unsteady-aero`'s augmented model with its lags as states: the same model as the one fed
+the lagging part of its states as inputs, and what lets a discriminating design drive it."""
+
+import numpy as np
+import pytest
+
+import fwid
+from fwid.design._signals import Grid, input_3211
+from fwid.diagnosis._augment import augment
+from fwid.diagnosis._catalogue import lagging_part
+from fwid.diagnosis._lag_states import lag_states
+
+TAU = 0.1
+LAG = {"Mw_lag": 0.003, "Zw_lag": -0.05, "Xu_lag": -0.02, "Mq_lag": -0.001}
+
+
+@pytest.fixture(scope="module")
+def setup():
+    from fwid.synth import DELFLY, NOISE
+
+    vehicle, trim = DELFLY.vehicle(), DELFLY.trim()
+    consts = {"mass": vehicle["mass"], "Iy": vehicle["Iy"], "g": vehicle["g"],
+              "u0": trim["u0"], "w0": trim["w0"], "theta0": trim["theta0"]}
+    R = np.diag([NOISE[k] ** 2 for k in ("q", "u", "w", "theta")])
+    model, _, _ = augment("lon", [("unsteady-aero", TAU)])
+    return model.with_params(LAG), model, consts, R
+
+
+def _simulate(model, t, u, consts):
+    exp = fwid.Experiment(t, u, np.zeros((t.size, len(model.outputs))),
+                          x0=np.zeros(len(model.states)), consts=consts)
+    xs, ys = fwid.simulate(model, exp)
+    return np.asarray(xs), np.asarray(ys)
+
+
+def test_the_lag_states_equal_the_lag_inputs_fed_the_models_own_states(setup):
+    model, _, consts, _ = setup
+    inner = lag_states(model, "lon", TAU)
+    assert inner.states == ("q", "u", "w", "theta", "u_lagged", "w_lagged", "q_lagged")
+    assert inner.inputs == ("de",) and inner.outputs == model.outputs
+    grid = Grid(4.0, 1.0, 100.0)
+    t, de = grid.t, input_3211(grid, 0.12)
+    xs, ys = _simulate(inner, t, de[:, None], consts)
+    # the input-lag model, fed lag(x) - x of the states the lag-state model simulated
+    # (`lagging_part`, the filter the diagnosis prepares the inputs with), simulates them back
+    lagp = np.stack([lagging_part(ys[:, model.states.index(s)], t[1] - t[0], TAU)
+                     for s in ("u", "w", "q")], axis=1)
+    _, y_in = _simulate(model, t, np.column_stack([de, lagp]), consts)
+    scale = np.max(np.abs(ys), axis=0)
+    assert np.all(np.max(np.abs(ys - y_in), axis=0) < 2e-3 * scale)
+    # the lag states are the lagged states (z = x + lag(x) - x)
+    np.testing.assert_allclose(xs[:, 4:], xs[:, [1, 2, 0]] + lagp, atol=1e-2 * scale[1])
+    # ... and the terms matter: held at zero, the prediction is another one
+    _, y_held = _simulate(model, t, np.column_stack([de, 0 * lagp]), consts)
+    assert np.all(np.max(np.abs(ys - y_held), axis=0) > 0.2 * scale)
+
+
+def test_a_discriminating_design_drives_the_lag_terms(setup):
+    model, plain, consts, R = setup
+    zero = {k: 0.0 for k in LAG}
+    # two models that differ only in the lag terms: with the lags held at zero (the inputs of
+    # the augmented model) no input tells them apart
+    t = np.linspace(0.0, 3.0, 61)
+    de = 0.1 * np.sign(np.sin(2 * np.pi * 0.7 * t))[:, None]
+    held = np.column_stack([de, np.zeros((t.size, 3))])
+    np.testing.assert_array_equal(_simulate(model, t, held, consts)[1],
+                                  _simulate(plain.with_params(zero), t, held, consts)[1])
+    a, b = lag_states(plain.with_params(zero), "lon", TAU), lag_states(model, "lon", TAU)
+    d = fwid.design_discriminating(a, b, consts=consts, R=R, amplitude=0.1, duration=3.0,
+                                   quiet=1.0, rate=20.0, attitude="theta", restarts=2,
+                                   iterations=30, switch_rate=5.0)
+    ya = _simulate(a, d.t, d.u[:, None], consts)[1]
+    yb = _simulate(b, d.t, d.u[:, None], consts)[1]
+    W = np.linalg.inv(R)
+    assert d.distance == pytest.approx(np.einsum("ki,ij,kj->", ya - yb, W, ya - yb), rel=1e-9)
+    assert d.distance > 10.0  # many noise variances: a flight would tell them apart
+    assert d.distance >= d.distance_3211 > 0
+
+
+def test_the_loads_along_a_trajectory_are_the_input_lag_models_loads(setup):
+    # `states_along` + the lag-state model's force model = the input-lag model's force model
+    # fed `lagging_part` of the trajectory (numpy, the diagnosis's filter): what the loads
+    # criterion of the discriminating design compares
+    from fwid.diagnosis._lag_states import states_along
+    from fwid.simulation._simulate import simulate_forces
+
+    model, _, consts, _ = setup
+    inner = lag_states(model, "lon", TAU)
+    t = np.linspace(0.0, 3.0, 151)
+    de = 0.1 * np.sign(np.sin(2 * np.pi * 0.7 * t))
+    y = _simulate(inner, t, de[:, None], consts)[1] + 0.01 * np.sin(7 * t)[:, None]
+    x = np.asarray(states_along(inner, y, t[1] - t[0]))
+    assert x.shape == (t.size, 7)
+    z4 = np.zeros((t.size, 4))
+    got = np.asarray(simulate_forces(inner, x, fwid.Experiment(t, de[:, None], z4,
+                                                               x0=np.zeros(7), consts=consts)))
+    lagp = np.stack([lagging_part(y[:, model.states.index(s)], t[1] - t[0], TAU)
+                     for s in ("u", "w", "q")], axis=1)
+
+    def loads(lag_inputs):
+        exp = fwid.Experiment(t, np.column_stack([de, lag_inputs]), z4, x0=np.zeros(4),
+                              consts=consts)
+        return np.asarray(simulate_forces(model, y, exp))
+    want = loads(lagp)
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12 * np.max(np.abs(want)))
+    assert np.max(np.abs(want - loads(0 * lagp))) > 1e-3 * np.max(np.abs(want))
