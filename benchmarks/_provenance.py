@@ -17,11 +17,16 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+# this checkout's fwid before any installed one, so that the commit recorded is the code run
+# (a script imports this module before fwid)
+if str(ROOT) not in sys.path:
+    sys.path.insert(1, str(ROOT))
 
 
 def provenance(argv: list[str] | None = None) -> dict:
     """The command line (`python benchmarks/NAME.py ARGS`), the commit of the checkout (with
-    `+dirty` when it has uncommitted changes) and the UTC date and time."""
+    `+dirty` when it has uncommitted changes, and where `fwid` came from when it is not this
+    checkout's) and the UTC date and time."""
     argv = sys.argv if argv is None else argv
     script = Path(argv[0]).resolve()
     try:
@@ -40,6 +45,10 @@ def provenance(argv: list[str] | None = None) -> dict:
     commit = git("rev-parse", "--short=12", "HEAD") or "unknown"
     if git("status", "--porcelain", "--untracked-files=no"):
         commit += "+dirty"
+    fwid = sys.modules.get("fwid")
+    where = Path(getattr(fwid, "__file__", None) or ROOT).resolve()
+    if ROOT not in where.parents:  # the code run is not this checkout's: say whose it is
+        commit += f" (but fwid imported from {where.parent})"
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     return {"command": command, "commit": commit, "date": date}
 

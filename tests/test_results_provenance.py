@@ -61,3 +61,19 @@ def test_writers_helpers(tmp_path):
     lines.write_text(_provenance.jsonl_first_line(prov) + '{"kind": "single"}\n')
     assert _provenance.records(lines) == [{"kind": "single"}]
     assert _provenance.markdown("no title", prov).startswith("Command: `python benchmarks/a.py`")
+
+
+def test_the_commit_says_when_fwid_is_not_this_checkouts(monkeypatch, tmp_path):
+    """A results file records this checkout's commit: when the `fwid` imported is another
+    copy's (an installed one, another worktree), the commit says so."""
+    import sys
+    import types
+
+    fake = types.ModuleType("fwid")
+    fake.__file__ = str(tmp_path / "elsewhere" / "fwid" / "__init__.py")
+    monkeypatch.setitem(sys.modules, "fwid", fake)
+    prov = _provenance.provenance(["benchmarks/joint.py"])
+    assert f"(but fwid imported from {tmp_path / 'elsewhere' / 'fwid'})" in prov["commit"]
+    fake.__file__ = str(_provenance.ROOT / "fwid" / "__init__.py")
+    monkeypatch.setitem(sys.modules, "fwid", fake)
+    assert "imported from" not in _provenance.provenance(["benchmarks/joint.py"])["commit"]
