@@ -168,23 +168,6 @@ def design_discriminating(
             out.append(simulate(m, exp)[1])
         return out
 
-    by_loads = loads_a is not None and loads_b is not None
-    scale = [None if load_scale is None else jnp.asarray(load_scale, dtype=float)]
-
-    def load_difference(u, ys):
-        out = 0.0
-        for y in ys:
-            d = loads_a(grid.t, u, y) - loads_b(grid.t, u, y)
-            out = out + 0.5 * jnp.sum(((d - jnp.mean(d, axis=0)) / scale[0]) ** 2)
-        return out
-
-    def distance(u):
-        ya, yb = responses(u)
-        if by_loads:
-            return load_difference(u, (ya, yb)), ya, yb
-        d = (ya - yb) @ W.T
-        return jnp.sum(d**2), ya, yb
-
     # the reference 3211 (the attitude bound, a restart): at the full amplitude, filling the
     # window or faster (units of T/7, T/14, T/28, no shorter than a step), else halved
     units = [grid.length / k for k in (7, 14, 28) if grid.length / k >= 1.0 / switch_rate
@@ -194,22 +177,43 @@ def design_discriminating(
         for h in range(HALVINGS + 1):
             for unit in units:
                 ref = input_3211(grid, amplitude / 2**h, unit)
-                if _finite(responses(jnp.asarray(ref)), att):
-                    return amplitude / 2**h, ref, unit
+                ys = responses(jnp.asarray(ref))
+                if _finite(ys, att):
+                    return amplitude / 2**h, ref, unit, ys
         raise InputError(f"design: a model's prediction diverges even for a 3211 of "
                          f"{amplitude / 2**HALVINGS:.3g} rad ({amplitude:g} rad / "
                          f"2^{HALVINGS}): that model is unstable at trim; check its fit "
                          "(re-fit it on more flights) before designing with it")
 
-    used, ref, unit = reference()
-    if by_loads and scale[0] is None:
-        la = np.asarray(loads_a(grid.t, jnp.asarray(ref), responses(jnp.asarray(ref))[0]))
-        scale[0] = jnp.asarray(np.std(la, axis=0) + 1e-12 * np.max(np.abs(la)) + 1e-300)
+    used, ref, unit, ys_ref = reference()
+    by_loads = loads_a is not None and loads_b is not None
+    if not by_loads:
+        scale = None
+    elif load_scale is not None:
+        scale = jnp.asarray(load_scale, dtype=float)
+    else:  # model a's loads along its own prediction of the reference 3211
+        la = np.asarray(loads_a(grid.t, jnp.asarray(ref), ys_ref[0]))
+        scale = jnp.asarray(np.std(la, axis=0) + 1e-12 * np.max(np.abs(la)) + 1e-300)
+
+    def load_difference(u, ys):
+        out = 0.0
+        for y in ys:
+            d = loads_a(grid.t, u, y) - loads_b(grid.t, u, y)
+            out = out + 0.5 * jnp.sum(((d - jnp.mean(d, axis=0)) / scale) ** 2)
+        return out
+
+    def distance(u):
+        ya, yb = responses(u)
+        if by_loads:
+            return load_difference(u, (ya, yb)), ya, yb
+        d = (ya - yb) @ W.T
+        return jnp.sum(d**2), ya, yb
+
     u3211 = input_3211(grid, used)  # the comparison: filling the window
     if att is None or attitude_bound is None:
         bound = None
     elif attitude_bound == "3211":
-        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in responses(ref)))
+        bound = float(max(np.max(np.abs(np.asarray(y)[:, att])) for y in ys_ref))
     else:
         bound = float(attitude_bound)
 
