@@ -93,6 +93,14 @@ class Explanation:
         return float(np.mean(self.loss)) + self.charge
 
 
+def bootstrap_weights(n: int, resamples: int = RESAMPLES, seed: int = 0) -> np.ndarray:
+    """`(resamples, n)` weights of the `n` blocks in each bootstrap draw (with replacement):
+    a draw's mean of per-block values is `weights @ values`. The seed makes the set
+    reproducible."""
+    rng = np.random.default_rng(seed)
+    return rng.multinomial(n, np.full(n, 1.0 / n), size=resamples) / n
+
+
 def mcs_p_values(losses: np.ndarray, resamples: int = RESAMPLES, seed: int = 0) -> np.ndarray:
     """The MCS p value of each model (Hansen, Lunde & Nason 2011, `T_max`).
 
@@ -102,8 +110,7 @@ def mcs_p_values(losses: np.ndarray, resamples: int = RESAMPLES, seed: int = 0) 
     **Returns:** the p values, shape `(models,)`; the last model standing has 1.
     """
     n, m = losses.shape
-    rng = np.random.default_rng(seed)
-    counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples) / n  # (B, n) weights
+    counts = bootstrap_weights(n, resamples, seed)
     live = list(range(m))
     out = np.ones(m)
     worst_p = 0.0
@@ -187,16 +194,15 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
 
 
 def better_p_value(larger: np.ndarray, smaller: np.ndarray, resamples: int = RESAMPLES,
-                   seed: int = 0) -> float:
+                   seed: int = 0, weights: np.ndarray | None = None) -> float:
     """The one-sided block-bootstrap p value of "`larger` is no better than `smaller`": the
     share of centred bootstrap means of the per-block difference `larger - smaller` (charged
     losses) at or below its observed mean. Small when the larger explanation's loss is
-    significantly lower."""
+    significantly lower. `weights`: `bootstrap_weights` drawn once for many tests (default:
+    drawn here from `resamples`, `seed`)."""
     d = np.asarray(larger, dtype=float) - np.asarray(smaller, dtype=float)
-    n = d.size
-    rng = np.random.default_rng(seed)
-    counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples) / n
-    boot = counts @ (d - d.mean())
+    w = bootstrap_weights(d.size, resamples, seed) if weights is None else weights
+    boot = w @ (d - d.mean())
     return float(np.mean(boot <= d.mean()))
 
 
@@ -207,10 +213,11 @@ def parsimonious(kept: Sequence[Explanation], level: float = LEVEL,
     order of `kept`. Smaller explanations are judged first, so each is compared only with
     explanations that stay."""
     stays: list[Explanation] = []
+    weights = bootstrap_weights(len(kept[0].loss), resamples) if kept else None
     for x in sorted(kept, key=lambda x: len(x.effects)):
         own = set(x.names)
         subs = [y for y in stays if set(y.names) < own]
-        if all(better_p_value(x.loss + x.charge, y.loss + y.charge, resamples) < level
+        if all(better_p_value(x.loss + x.charge, y.loss + y.charge, weights=weights) < level
                for y in subs):
             stays.append(x)
     return [x for x in kept if any(x is y for y in stays)]
