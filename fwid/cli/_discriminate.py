@@ -254,7 +254,7 @@ def discriminate(args) -> int:
     flights = fwid.data.build_flights(records)
     say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
     models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
-    by = getattr(args, "discriminate_by", "loads")
+    by = args.discriminate_by
     loads = load_maps(models, maps, consts) if by == "loads" else (None, None)
     d = fwid.design_discriminating(
         models[0], models[1], consts=consts, R=R, amplitude=args.amplitude,
