@@ -17,6 +17,7 @@ import numpy as np
 from .._errors import FlightDataError, FwidError, InputError
 from ..data._sidefiles import VEHICLE_FILE, read_vehicle
 from ._attitude import smooth_attitude
+from ._body_frame import compose, cycle_samples, reference, split
 from ._checks import check_frame, residuals
 from ._clock import MIN_OVERLAP, find_offset, resample
 from ._loads import body_states, rigid_body_loads
@@ -113,7 +114,8 @@ def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, p
     return out
 
 
-def _translation(takes, pos, tracked, fs):
+def _smooth_positions(takes, pos, tracked, fs):
+    """Smooth positions `(N, 3)` per axis (three problems a take), vmapped by sample step."""
     out = [None] * len(takes)
     for idx in _groups(range(len(takes)), lambda i: round(takes[i].dt, 12)):
         dt = takes[idx[0]].dt
@@ -128,6 +130,21 @@ def _translation(takes, pos, tracked, fs):
                                 v[j] if isinstance(v, np.ndarray) else v
                                 for k, v in sm._asdict().items()))
     return out
+
+
+def _translation(takes, pos, tracked, fs, atts):
+    """Position, velocity and acceleration with the flapping harmonics in body axes
+    (`_body_frame`): a world-axis pass for the slow reference, then the remainder in the body
+    axes of the smoothed attitudes `atts`. Noise levels and bandwidths: the second pass's."""
+    first = _smooth_positions(takes, pos, tracked, fs)
+    refs = [reference((f.pos, f.vel, f.acc), cycle_samples(phase_of(c, t.dt)[1], t.dt))
+            for f, c, t in zip(first, fs, takes)]
+    body = [np.where(tr[:, None], split(p, r[0], a.R), np.nan)
+            for p, r, a, tr in zip(pos, refs, atts, tracked)]
+    second = _smooth_positions(takes, body, tracked, fs)
+    return [s._replace(**dict(zip(("pos", "vel", "acc"),
+                                  compose(r, (s.pos, s.vel, s.acc), a.R, a.w, a.a))))
+            for s, r, a in zip(second, refs, atts)]
 
 
 def _vehicle(path: Path, vehicle):
@@ -265,7 +282,8 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
                      params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
     final_att = {st[0]: a for st, a in zip(with_gyro, att1)}
     trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
-                         [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage])
+                         [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage],
+                         [final_att.get(i, a0) for i, _, _, _, a0 in stage])
     for (i, s, cols, clock, a0), tr in zip(stage, trans):
         f, take, veh, vpath = ok[i]
         try:
