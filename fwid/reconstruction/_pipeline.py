@@ -21,9 +21,10 @@ from ._body_frame import compose, cycle_samples, reference, split
 from ._checks import check_frame, residuals
 from ._clock import MIN_OVERLAP, find_offset, resample
 from ._loads import body_states, rigid_body_loads
-from ._model import phase_of
+from ._model import HARMONICS, phase_of
 from ._raw import MAX_DROPOUT, RawTake
 from ._read import raw_files, read_raw
+from ._shrink import coefficient_variance, shrink_harmonics
 from ._smoother import _fns, smooth_batch
 from ._workers import Failed, run_all, start
 
@@ -145,6 +146,20 @@ def _translation(takes, pos, tracked, fs, atts):
     return [s._replace(**dict(zip(("pos", "vel", "acc"),
                                   compose(r, (s.pos, s.vel, s.acc), a.R, a.w, a.a))))
             for s, r, a in zip(second, refs, atts)]
+
+
+def _shrunk(att, f, dt, tracked):
+    """`att` with the flapping harmonics of its rates that the take cannot resolve shrunk
+    (`_shrink`): the variance of a rate coefficient of harmonic `k` from the attitude's
+    noise, `(k W)^2` times the angle's, combined with the gyro's where there is one."""
+    ph, om = phase_of(f, dt)
+    n = int(np.sum(tracked))
+    kw = np.arange(1, HARMONICS + 1)[:, None] * np.nanmedian(om)
+    var = kw**2 * coefficient_variance(att.sigma, n)[None]
+    if att.sigma_gyro is not None:
+        var = 1.0 / (1.0 / var + 1.0 / coefficient_variance(att.sigma_gyro, len(f))[None])
+    (w, a), _ = shrink_harmonics([att.w, att.a], ph, om, var, cycle_samples(om, dt))
+    return att._replace(w=w, a=a)
 
 
 def _vehicle(path: Path, vehicle):
@@ -281,13 +296,15 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
                      starts=[a.R[s] for _, s, _, _, a in with_gyro],
                      params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
     final_att = {st[0]: a for st, a in zip(with_gyro, att1)}
+    final_att = {i: _shrunk(final_att.get(i, a0), c["f"], ok[i][1].dt, ok[i][1].tracked[s])
+                 for i, s, c, _, a0 in stage}
     trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
                          [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage],
-                         [final_att.get(i, a0) for i, _, _, _, a0 in stage])
-    for (i, s, cols, clock, a0), tr in zip(stage, trans):
+                         [final_att[i] for i, *_ in stage])
+    for (i, s, cols, clock, _), tr in zip(stage, trans):
         f, take, veh, vpath = ok[i]
         try:
-            att = final_att.get(i, a0)
+            att = final_att[i]
             flights[i] = _assemble(take, s, cols, clock, att, tr, veh, vpath)
             e = flights[i].entry
             off = f", clock offset {e['clock_offset_s']:.4f} s" if clock is not None else ""
