@@ -158,7 +158,7 @@ def _shrunk(att, f, dt, tracked):
     var = kw**2 * coefficient_variance(att.sigma, n)[None]
     if att.sigma_gyro is not None:
         var = 1.0 / (1.0 / var + 1.0 / coefficient_variance(att.sigma_gyro, len(f))[None])
-    (w, a), _ = shrink_harmonics([att.w, att.a], ph, om, var, cycle_samples(om, dt))
+    (w, a), _ = shrink_harmonics([att.w, att.a], ph, om, var, dt)
     return att._replace(w=w, a=a)
 
 

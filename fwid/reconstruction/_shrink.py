@@ -33,7 +33,7 @@ def coefficient_variance(sigma: Float[np.ndarray, " c"], samples: int) -> Float[
 
 
 def shrink_harmonics(series: list, phase: Float[np.ndarray, " n"], omega: Float[np.ndarray, " n"],
-                     variance: Float[np.ndarray, "k c"], cycle: int) -> tuple[list, np.ndarray]:
+                     variance: Float[np.ndarray, "k c"], dt: float) -> tuple[list, np.ndarray]:
     """Shrink the constant part of each flapping harmonic of a smoothed signal.
 
     **Arguments:**
@@ -41,7 +41,7 @@ def shrink_harmonics(series: list, phase: Float[np.ndarray, " n"], omega: Float[
     - `phase`, `omega` `(N,)`: flapping phase and angular frequency;
     - `variance` `(HARMONICS, c)`: the noise variance of one coefficient of harmonic `k` of the
       signal (`series[0]`);
-    - `cycle`: samples in one flapping cycle (the slow part is the signal averaged over it).
+    - `dt`: sample step (s); the slow part is the signal averaged over a flapping cycle.
 
     **Returns:** the series with each harmonic's part scaled by its factor `g`, and `g`
     `(HARMONICS, c)`.
@@ -50,6 +50,7 @@ def shrink_harmonics(series: list, phase: Float[np.ndarray, " n"], omega: Float[
     if not np.isfinite(omega).any():
         return list(series), np.ones_like(variance)
     good = np.all(np.isfinite(y), 1) & np.isfinite(omega)
+    cycle = max(1, int(round(2 * np.pi / (np.nanmedian(omega) * dt))))
     fast = y - _cycle_mean(y, cycle)
     edge = min(2 * cycle, len(y) // 4)  # where the average's edges leave slow motion in `fast`
     good[:edge] = good[len(y) - edge:] = False

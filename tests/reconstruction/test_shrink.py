@@ -28,7 +28,7 @@ def test_noise_level_harmonics_go_and_strong_ones_stay():
     left = B @ np.linalg.lstsq(B, noise, rcond=None)[0]
     y = clean + left[:, None]
     var = np.full((3, 1), coefficient_variance(np.array([sigma]), len(T)))
-    (out,), g = shrink_harmonics([y], ph, om, var, 17)
+    (out,), g = shrink_harmonics([y], ph, om, var, DT)
     assert g[0, 0] > 0.99 and g[1, 0] > 0.95  # 10 and 3 mm against 0.05 mm of noise
     assert g[2, 0] < 0.5
     # the third harmonic's noise is gone, the others' (a third each) kept
@@ -45,7 +45,7 @@ def test_derivatives_follow():
     harm = [1e-3 * np.cos(3 * ph + 0.9), -1e-3 * w * np.sin(3 * ph + 0.9),
             -1e-3 * w**2 * np.cos(3 * ph + 0.9)]
     series = [(a + b)[:, None] for a, b in zip(slow, harm)]
-    out, g = shrink_harmonics(series, ph, 2 * np.pi * f, np.full((3, 1), 1.0), 17)
+    out, g = shrink_harmonics(series, ph, 2 * np.pi * f, np.full((3, 1), 1.0), DT)
     assert np.all(g == 0)
     s = slice(40, -40)
     for o, sl, h in zip(out, slow, harm):
