@@ -28,7 +28,7 @@ HARMONIC_LIMIT = 0.45
 CUTOFFS = (0.5, 1.0, 2.0, 4.0, 8.0)
 COEFF_BANDWIDTHS = (0.03, 0.1, 0.3, 1.0, 3.0)
 #: Gyro noise over attitude noise (1/s, ratio of standard deviations) tried.
-GYRO_RATIOS = (3.0, 10.0, 30.0, 100.0)
+GYRO_RATIOS = (0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
 
 
 #: `transition` is the identity but for its leading `MIXING x MIXING` block.
