@@ -232,13 +232,14 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
             pool.shutdown()
 
 
-def _align(take: RawTake, w, clock_offset, min_overlap):
+def _align(take: RawTake, w, sigma, clock_offset, min_overlap):
     """The clock offset of a take with an autopilot log (from the body rates `w` smoothed
-    without the gyro), the take's samples the log covers and the log's signals there."""
+    without the gyro, from attitudes of noise `sigma`), the take's samples the log covers and
+    the log's signals there."""
     log = take.onboard
     gyro = np.stack([log.columns[c] for c in "pqr"], 1)
     clock = find_offset(take.t, w, log.t, gyro, float(np.median(log.columns["f"])),
-                        given=clock_offset, min_overlap=min_overlap)
+                        given=clock_offset, min_overlap=min_overlap, sigma=sigma)
     if clock is None:
         at = ("any clock offset" if clock_offset is None
               else f"the clock offset {clock_offset:g} s given")
@@ -273,8 +274,9 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
                      passes=[1 if t.onboard is not None else 2 for t in takes])
     logged = [i for i, t in enumerate(takes) if t.onboard is not None]
-    aligned = dict(zip(logged, run_all(_align, [((takes[i], att0[i].w, clock_offset, min_overlap),
-                                                  {}) for i in logged], pool)))
+    tasks = [((takes[i], att0[i].w, att0[i].sigma, clock_offset, min_overlap), {})
+             for i in logged]
+    aligned = dict(zip(logged, run_all(_align, tasks, pool)))
     flights, stage = [None] * len(ok), []
     for i, (f, take, veh, vpath) in enumerate(ok):
         if take.onboard is None:

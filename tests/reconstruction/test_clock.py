@@ -25,3 +25,21 @@ def test_a_log_whose_grid_ends_past_it_by_round_off_is_aligned():
     clock = find_offset(t, _rates(t), t_log, gyro, 12.0)
     assert clock is not None
     assert abs(clock.offset - offset) < 1e-4
+
+
+def test_std_is_no_better_than_the_tracking_allows():
+    """With the attitude's noise given, the offset's `std` is at least the Cramer-Rao bound of
+    a time shift seen through that noise, `1 / sqrt(sum w^2 / sigma^2)`; without it, only the
+    fit's curvature (far smaller: it takes the smoothed rates as exact)."""
+    t = np.arange(901) * 0.005
+    offset = 3.25
+    t_log = t[0] - offset - 0.1 + np.arange(2400) * 0.001953125
+    gyro = _rates(t_log + offset)
+    w = _rates(t) + 0.002 * np.random.default_rng(0).standard_normal((len(t), 3))
+    sigma = np.full(3, np.deg2rad(0.15))
+    bound = 1.0 / np.sqrt(np.sum(w ** 2 / sigma ** 2))
+    alone = find_offset(t, w, t_log, gyro, 12.0)
+    told = find_offset(t, w, t_log, gyro, 12.0, sigma=sigma)
+    assert told.offset == alone.offset
+    assert told.std >= bound and told.std >= alone.std
+    assert alone.std < 0.5 * bound
