@@ -43,6 +43,22 @@ def _rms_by_state(ident: Identification, states: Sequence[str]) -> dict:
         [(v.simulated[s] - v.measured[s]) ** 2 for v in ident.validation])))) for s in states}
 
 
+#: A simulated error this many times the measured signal's own RMS is a simulation that
+#: diverged (an unstable identified model run open loop), not a misfit.
+DIVERGED = 10.0
+
+
+def _diverged(ident: Identification, errors: dict) -> list[str]:
+    """The states whose simulated error on the test flights exceeds `DIVERGED` times the
+    measured signal's RMS (about its mean)."""
+    out = []
+    for s, e in errors.items():
+        x = np.concatenate([v.measured[s] for v in ident.validation])
+        if e > DIVERGED * max(float(np.std(x)), np.finfo(float).tiny):
+            out.append(s)
+    return out
+
+
 def fit_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                  cutoff: float = 5.0) -> Identification:
     """The baseline (Eq. 7 or 8) fitted jointly on `train`, validated on `test`. It misses
@@ -155,6 +171,8 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     augmented_ok = bool(failed is None and (after_id is None
                                             or all(f.converged for f in after_id.fits)))
     ratio = np.mean([(after[s] / before[s]) ** 2 for s in states if before[s] > 0])
+    diverged = sorted(set(_diverged(before_id, before))
+                      | set(_diverged(after_id, after) if after_id is not None else ()))
     summary = {
         "states": states,
         "effects": in_eom,
@@ -163,17 +181,23 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                                                   if n not in left_out]),
         "test_rms_before": before,
         "test_rms_after": None if failed else after,
-        "shrink_pct": None if failed else 100.0 * (1.0 - math.sqrt(float(ratio))),
+        "shrink_pct": None if failed or diverged else 100.0 * (1.0 - math.sqrt(float(ratio))),
         "converged": bool(base_ok and augmented_ok),
         # which fit did not: the baseline's (its error, and so the shrink, may be overstated)
         # or the augmented model's (the shrink may be understated)
         "converged_baseline": base_ok,
         "converged_augmented": augmented_ok,
+        # the states whose simulation diverged (error over DIVERGED x the signal): no shrink
+        "diverged": diverged,
         "warnings": sorted({str(w.message).split(": ", 1)[-1] for w in caught}
                            | {m.split(": ", 1)[-1] for m in fit_warnings}
                            | {m.split(": ", 1)[-1] for f in before_id.fits
                               for m in f.warnings}),
-        **({"message": failed} if failed else {}),
+        **({"message": failed} if failed else
+           {"message": f"the simulation diverges on the test flights ({', '.join(diverged)} off "
+                       f"by more than {DIVERGED:g} times their own RMS: an unstable model run "
+                       "open loop), so it says nothing of the effect; see simulation.warnings"}
+           if diverged else {}),
         "method": "baseline and augmented model fitted jointly on the training flights "
                   "(output-error ML, Eqs. 10-11), simulated on the test flights with their "
                   "bias terms re-estimated",

@@ -10,6 +10,19 @@ from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
 
 
+#: Eigenvalues of the residual covariance below this share of its largest are raised to it
+#: (outputs whose residuals are nearly proportional, as a diverging simulation makes them).
+FLOOR = 1e-12
+
+
+def _whitener(R: np.ndarray) -> np.ndarray:
+    """`W` with `W^T W = R^-1` for a covariance `R`, its eigenvalues floored at `FLOOR` times
+    the largest (a Cholesky factor fails on a singular `R`)."""
+    lam, V = np.linalg.eigh(0.5 * (R + R.T))
+    top = max(float(lam.max()), np.finfo(float).tiny)
+    return (V / np.sqrt(np.maximum(lam, FLOOR * top))).T
+
+
 def refit_local_affine(model: GreyBoxModel, exp: Experiment, *, passes: int = 20):
     """ML estimate of the bias terms (`model.local`) on one flight, all else held, for a model
     whose outputs are affine in them (Eq. 7 with biases: `x' = A x + B u + b`).
@@ -40,7 +53,7 @@ def refit_local_affine(model: GreyBoxModel, exp: Experiment, *, passes: int = 20
     b = np.zeros(len(local))
     R = r0.T @ r0 / r0.shape[0]
     for _ in range(passes):
-        Linv = np.linalg.inv(np.linalg.cholesky(R + 1e-300 * np.eye(R.shape[0])))
+        Linv = _whitener(R)
         A = np.einsum("ij,njp->nip", Linv, S).reshape(-1, len(local))
         rhs = (r0 @ Linv.T).reshape(-1)
         b_new, *_ = np.linalg.lstsq(A, rhs, rcond=None)

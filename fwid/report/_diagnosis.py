@@ -304,6 +304,8 @@ def plot_gap_sim(d: Diagnosis, path: str | Path | None = None, flight: int = 0) 
     shrink = d.simulation["shrink_pct"]
     fig.suptitle(f"fwid diagnose ({d.axis}): test flight {base.name}, simulated states; "
                  + (f"shrink {shrink:.1f} %" if shrink is not None else
+                    "the simulation diverges (see simulation.message)"
+                    if d.simulation.get("diverged") else
                     "the augmented model diverged (see simulation.message)"))
     if path is not None:
         fig.savefig(path, dpi=110)
