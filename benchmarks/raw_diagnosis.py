@@ -87,7 +87,7 @@ def summary(rows: list[dict], half: str) -> str:
             shr = ", ".join(f"{r['simulated_shrink_pct']:.0f}" for r in rs
                             if r["simulated_shrink_pct"] is not None) or "-"
             lines.append(f"| {form} | {eff} | {sum(r['right'] for r in rs)}/{len(rs)} | "
-                         f"{', '.join(r['verdict'] for r in rs)} | {sets} | {shr} |")
+                         f"{', '.join(r['verdict'] or 'error' for r in rs)} | {sets} | {shr} |")
     return "\n".join(lines) + "\n"
 
 
