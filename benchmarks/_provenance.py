@@ -46,7 +46,7 @@ def provenance(argv: list[str] | None = None) -> dict:
     if git("status", "--porcelain", "--untracked-files=no"):
         commit += "+dirty"
     fwid = sys.modules.get("fwid")
-    where = Path(getattr(fwid, "__file__", None) or ROOT).resolve()
+    where = Path(getattr(fwid, "__file__", None) or ROOT / "fwid" / "__init__.py").resolve()
     if ROOT not in where.parents:  # the code run is not this checkout's: say whose it is
         commit += f" (but fwid imported from {where.parent})"
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")

@@ -77,3 +77,6 @@ def test_the_commit_says_when_fwid_is_not_this_checkouts(monkeypatch, tmp_path):
     fake.__file__ = str(_provenance.ROOT / "fwid" / "__init__.py")
     monkeypatch.setitem(sys.modules, "fwid", fake)
     assert "imported from" not in _provenance.provenance(["benchmarks/joint.py"])["commit"]
+    # a script that runs fwid only as processes from this checkout (never imports it)
+    monkeypatch.delitem(sys.modules, "fwid")
+    assert "imported from" not in _provenance.provenance(["benchmarks/joint.py"])["commit"]
