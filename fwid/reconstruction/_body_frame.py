@@ -7,11 +7,11 @@ follow it through a manoeuvre (the pitch changes by some degrees in a second; at
 of pitch, 8 degrees move a fifth of the X harmonic into Z). The rebuilt flapping loads
 would then be modulated by the attitude, which the diagnosis reads as `flap-coupling`.
 
-The positions are therefore smoothed twice (`split`, `compose`): once per world axis, for
-a slow reference `r(t)` (that pass's path averaged over a flapping cycle, twice: its
-harmonics cancel); then the remainder `z = R^T (p - r)`, in body axes (`R` body -> NED),
-where the harmonics have constant coefficients and the slow part is what the reference
-left. The path is `p = r + R z`, and with `R' = R [w]x`,
+The positions are therefore smoothed twice (`split`, `compose`): once per world axis, whose
+slow part alone (the white-jerk states, without the harmonics) is the reference `r(t)`; then
+the remainder `z = R^T (p - r)`, in body axes (`R` body -> NED), where the harmonics have
+constant coefficients and the slow part is what the reference left. The path is
+`p = r + R z`, and with `R' = R [w]x`,
 
     p'  = r'  + R (z' + w x z)
     p'' = r'' + R (z'' + 2 w x z' + w' x z + w x (w x z)).
@@ -21,21 +21,6 @@ from __future__ import annotations
 
 import numpy as np
 from jaxtyping import Float
-
-from ._smoother import _cycle_mean
-
-
-def cycle_samples(omega: Float[np.ndarray, " n"], dt: float) -> int:
-    """Samples in one flapping cycle at the median angular frequency `omega` (rad/s)."""
-    w0 = np.nanmedian(omega) if np.isfinite(omega).any() else np.nan
-    return max(1, int(round(2 * np.pi / (w0 * dt)))) if np.isfinite(w0) and w0 > 0 else 1
-
-
-def reference(paths: tuple[Float[np.ndarray, "n 3"], ...], samples: int
-              ) -> tuple[Float[np.ndarray, "n 3"], ...]:
-    """A first pass's position, velocity and acceleration (`paths`), each averaged over
-    `samples` (one flapping cycle), twice: the slow reference `r, r', r''`."""
-    return tuple(_cycle_mean(np.asarray(x, float), samples) for x in paths)
 
 
 def split(pos: Float[np.ndarray, "n 3"], ref: Float[np.ndarray, "n 3"],

@@ -17,7 +17,7 @@ import numpy as np
 from .._errors import FlightDataError, FwidError, InputError
 from ..data._sidefiles import VEHICLE_FILE, read_vehicle
 from ._attitude import smooth_attitude
-from ._body_frame import compose, cycle_samples, reference, split
+from ._body_frame import compose, split
 from ._checks import check_frame, residuals
 from ._clock import MIN_OVERLAP, find_offset, resample
 from ._loads import body_states, rigid_body_loads
@@ -127,7 +127,7 @@ def _smooth_positions(takes, pos, tracked, fs):
                           _stack([tracked[i] for i in idx], n, False),
                           _stack(ph, n, "edge"), _stack(om, n, np.nan), dt, scale=1e-6, lengths=lens)
         for j, i in enumerate(idx):
-            out[i] = type(sm)(*(v[j, :lens[j]] if k in ("pos", "vel", "acc") else
+            out[i] = type(sm)(*(v[j, :lens[j]] if k in ("pos", "vel", "acc", "slow") else
                                 v[j] if isinstance(v, np.ndarray) else v
                                 for k, v in sm._asdict().items()))
     return out
@@ -137,9 +137,8 @@ def _translation(takes, pos, tracked, fs, atts):
     """Position, velocity and acceleration with the flapping harmonics in body axes
     (`_body_frame`): a world-axis pass for the slow reference, then the remainder in the body
     axes of the smoothed attitudes `atts`. Noise levels and bandwidths: the second pass's."""
-    first = _smooth_positions(takes, pos, tracked, fs)
-    refs = [reference((f.pos, f.vel, f.acc), cycle_samples(phase_of(c, t.dt)[1], t.dt))
-            for f, c, t in zip(first, fs, takes)]
+    refs = [tuple(f.slow[:, d, :] for d in range(3))
+            for f in _smooth_positions(takes, pos, tracked, fs)]
     body = [np.where(tr[:, None], split(p, r[0], a.R), np.nan)
             for p, r, a, tr in zip(pos, refs, atts, tracked)]
     second = _smooth_positions(takes, body, tracked, fs)
