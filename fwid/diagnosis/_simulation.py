@@ -173,6 +173,10 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     ratio = np.mean([(after[s] / before[s]) ** 2 for s in states if before[s] > 0])
     diverged = sorted(set(_diverged(before_id, before))
                       | set(_diverged(after_id, after) if after_id is not None else ()))
+    message = failed or (f"the simulation diverges on the test flights ({', '.join(diverged)} "
+                         f"off by more than {DIVERGED:g} times their own RMS: an unstable model "
+                         "run open loop), so it says nothing of the effect; see "
+                         "simulation.warnings" if diverged else None)
     summary = {
         "states": states,
         "effects": in_eom,
@@ -193,11 +197,7 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                            | {m.split(": ", 1)[-1] for m in fit_warnings}
                            | {m.split(": ", 1)[-1] for f in before_id.fits
                               for m in f.warnings}),
-        **({"message": failed} if failed else
-           {"message": f"the simulation diverges on the test flights ({', '.join(diverged)} off "
-                       f"by more than {DIVERGED:g} times their own RMS: an unstable model run "
-                       "open loop), so it says nothing of the effect; see simulation.warnings"}
-           if diverged else {}),
+        **({"message": message} if message else {}),
         "method": "baseline and augmented model fitted jointly on the training flights "
                   "(output-error ML, Eqs. 10-11), simulated on the test flights with their "
                   "bias terms re-estimated",

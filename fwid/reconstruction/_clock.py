@@ -87,7 +87,8 @@ def _xcorr(a: np.ndarray, b: np.ndarray, min_n: int):
 
 def find_offset(t: np.ndarray, w: np.ndarray, t_log: np.ndarray, gyro: np.ndarray,
                 f0: float, *, given: float | None = None,
-                min_overlap: float = MIN_OVERLAP, sigma=None) -> ClockOffset | None:
+                min_overlap: float = MIN_OVERLAP,
+                sigma: np.ndarray | None = None) -> ClockOffset | None:
     """The offset of the autopilot's clock (see the module docstring).
 
     **Arguments:**

@@ -139,8 +139,7 @@ def _translation(takes, pos, tracked, fs, atts):
     axes of the smoothed attitudes `atts`. Noise levels and bandwidths: the second pass's."""
     refs = [tuple(f.slow[:, d, :] for d in range(3))
             for f in _smooth_positions(takes, pos, tracked, fs)]
-    body = [np.where(tr[:, None], split(p, r[0], a.R), np.nan)
-            for p, r, a, tr in zip(pos, refs, atts, tracked)]
+    body = [split(p, r[0], a.R) for p, r, a in zip(pos, refs, atts)]  # NaN where untracked
     second = _smooth_positions(takes, body, tracked, fs)
     return [s._replace(**dict(zip(("pos", "vel", "acc"),
                                   compose(r, (s.pos, s.vel, s.acc), a.R, a.w, a.a))))
@@ -296,8 +295,8 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
                      gmasks=[np.ones(len(c["f"]), bool) for _, _, c, _, _ in with_gyro],
                      starts=[a.R[s] for _, s, _, _, a in with_gyro],
                      params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
-    final_att = {st[0]: a for st, a in zip(with_gyro, att1)}
-    final_att = {i: _shrunk(final_att.get(i, a0), c["f"], ok[i][1].dt, ok[i][1].tracked[s])
+    gyro_att = {st[0]: a for st, a in zip(with_gyro, att1)}
+    final_att = {i: _shrunk(gyro_att.get(i, a0), c["f"], ok[i][1].dt, ok[i][1].tracked[s])
                  for i, s, c, _, a0 in stage}
     trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
                          [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage],

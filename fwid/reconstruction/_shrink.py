@@ -9,9 +9,10 @@ the large flapping pitch rate in `w x I w` and the product of inertia: an error 
 It is applied to the smoothed body rates and angular accelerations (`_pipeline._shrunk`),
 where such errors reach the loads through products; the position's harmonics, which reach
 the forces linearly, are left as the smoother has them (shrinking them would trade their
-noise for a loss of the third harmonic). Each harmonic's constant part is estimated by least squares on the smoothed signal's
-flapping part (its cos and sin coefficients `c`), and scaled by the shrinkage factor of a
-Gaussian prior whose variance is estimated from the same numbers,
+noise for a loss of the third harmonic). Each harmonic's constant part is estimated by least
+squares on the smoothed signal's flapping part (its cos and sin coefficients `c`), and
+scaled by the shrinkage factor of a Gaussian prior whose variance is estimated from the same
+numbers,
 `g = max(0, 1 - 2 V / |c|^2)` with `V` the variance of one coefficient from the measurement
 noise alone (`2 sigma^2 / N` for `N` samples of noise `sigma`): a harmonic well above its
 noise keeps `g ~ 1`, one at its noise goes to zero.
