@@ -243,7 +243,7 @@ def diagnose(
 
     say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
         f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")
-    early = EarlyFits(train, test, axis, cutoff, baseline) if simulation else None
+    early = EarlyFits(train, test, axis, cutoff) if simulation else None
 
     def on_first(e: Effect) -> None:  # the leader's augmented fit starts now (`EarlyFits`)
         if early is not None and e.name in IN_EOM and not e.probe:

@@ -75,26 +75,40 @@ def normal_equations(design: np.ndarray, target: np.ndarray, projector: Projecto
 def solve(parts: Sequence[tuple[np.ndarray, np.ndarray, float]]) -> tuple[np.ndarray, float]:
     """Global coefficients `theta` minimising `sum_k |P_k (y_k - G_k theta)|^2`, and that
     minimum (the training error, local terms re-estimated), from the units' normal equations
-    (`normal_equations`).
+    (`normal_equations`), by `solve_stack`."""
+    ata = sum(p[0] for p in parts)
+    atb = sum(p[1] for p in parts)
+    btb = float(sum(p[2] for p in parts))
+    theta = solve_stack(np.asarray(ata)[None], np.asarray(atb)[None])[0]
+    return theta, max(error((ata, atb, btb), theta), 0.0)
+
+
+def solve_stack(ata: np.ndarray, atb: np.ndarray) -> np.ndarray:
+    """The least-squares coefficients of a stack of normal equations `ata` `(s, k, k)`,
+    `atb` `(s, k)`: `(s, k)`, each solved on its own (one batched eigen-decomposition).
 
     Columns are scaled to unit norm first and rank deficiency (a column that never moves,
     e.g. the rudder in an elevator manoeuvre) is handled by dropping it and by the
     pseudo-inverse of the Gram matrix (eigenvalues below `GRAM_RCOND` of the largest).
     """
-    ata = sum(p[0] for p in parts)
-    atb = sum(p[1] for p in parts)
-    btb = float(sum(p[2] for p in parts))
-    theta = np.zeros(len(atb))
-    if len(atb):
-        norms = np.sqrt(np.maximum(np.diag(ata), 0.0))
-        live = norms > 1e-12 * max(float(norms.max()), 1e-300)
-        if np.any(live):
-            n = norms[live]
-            w, v = np.linalg.eigh(ata[np.ix_(live, live)] / np.outer(n, n))
-            keep = w > GRAM_RCOND * max(float(w[-1]), 1e-300)
-            sol = v[:, keep] @ ((v[:, keep].T @ (atb[live] / n)) / w[keep])
-            theta[live] = sol / n
-    return theta, max(error((ata, atb, btb), theta), 0.0)
+    s, k = atb.shape
+    theta = np.zeros((s, k))
+    if not k:
+        return theta
+    norms = np.sqrt(np.maximum(np.diagonal(ata, axis1=1, axis2=2), 0.0))
+    live = norms > 1e-12 * np.maximum(norms.max(axis=1), 1e-300)[:, None]
+    if not np.all(live == live[:1]):  # columns dropped in some members only: one by one
+        return np.concatenate([solve_stack(ata[j:j + 1], atb[j:j + 1]) for j in range(s)])
+    cols = live[0]
+    if not np.any(cols):
+        return theta
+    n = norms[:, cols]
+    w, v = np.linalg.eigh(ata[:, cols][:, :, cols] / (n[:, :, None] * n[:, None, :]))
+    keep = w > GRAM_RCOND * np.maximum(w[:, -1:], 1e-300)
+    proj = np.einsum("sji,sj->si", v, atb[:, cols] / n)
+    sol = np.einsum("sij,sj->si", v, np.where(keep, proj / np.where(keep, w, 1.0), 0.0))
+    theta[:, cols] = sol / n
+    return theta
 
 
 def error(part: tuple[np.ndarray, np.ndarray, float], theta: np.ndarray) -> float:

@@ -19,8 +19,9 @@ import numpy as np
 
 from .._errors import FitDivergedError
 from ..data import Flight
-from ..estimate import quiet_fits
+from ..estimate import least_squares_start, quiet_fits
 from ..identification import Identification, get_model, identify
+from ..simulation import averaged
 from ._augment import augment, prepared_inputs
 
 
@@ -83,12 +84,13 @@ def start_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
 
 def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                   effects: Sequence[tuple[str, object]], cutoff: float,
-                  baseline: Identification) -> tuple[Identification | None, str | None, list]:
-    """The model augmented with `effects` fitted jointly on `train` from the `baseline`'s
-    estimates (the new terms at zero: the quadratic terms' equation-error start can make the
-    simulation blow up), validated on `test`. It may still miss part of the effect, so its
-    fit warnings (coloured residuals, slow convergence) are expected: kept in its fits
-    (`quiet_fits`), not issued.
+                  ) -> tuple[Identification | None, str | None, list]:
+    """The model augmented with `effects` fitted jointly on `train`, validated on `test`.
+    It starts where the baseline's fit starts, the baseline's least-squares (equation-error)
+    values, with the new terms at zero (their own equation-error start can make the
+    simulation blow up): it needs nothing of the baseline's fit, so the two run side by
+    side. It may still miss part of the effect, so its fit warnings (coloured residuals,
+    slow convergence) are expected: kept in its fits (`quiet_fits`), not issued.
 
     **Returns:** `(identification, failed, warnings)`: the identification (`None` when no
     effect has a form in the EOM, or the fit failed), why it failed (recorded, not raised)
@@ -99,9 +101,10 @@ def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     in_eom = [n for n, _ in effects if n not in left_out]
     if not in_eom:
         return None, None, []
-    fitted = {k: float(v) for k, v in baseline.model.params.items() if k not in base.local}
     try:
         with quiet_fits():
+            start = least_squares_start(base, [averaged(f, base, cutoff) for f in train])
+            fitted = {k: float(v) for k, v in start.params.items() if k not in base.local}
             after = identify([prepare(f) for f in train], model.with_params(fitted),
                              validate=[prepare(f) for f in test], joint=True, cutoff=cutoff,
                              start="model")
@@ -112,32 +115,30 @@ def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
 
 
 def start_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
-                    effects: Sequence[tuple[str, object]], cutoff: float,
-                    baseline: Future) -> Future:
-    """`fit_augmented` in a worker thread, once `baseline` (`start_baseline`'s future) is
-    done: started when the selection's first round has its leader, it runs beside the rest
-    of the selection, and `simulation_gap` takes its result when the verdict's effects are
-    `effects` (else it is left unused)."""
+                    effects: Sequence[tuple[str, object]], cutoff: float) -> Future:
+    """`fit_augmented` in a worker thread: started when the selection's first round has its
+    leader, it runs beside the rest of the selection and the baseline's fit, and
+    `simulation_gap` takes its result when the verdict's effects are `effects` (else it is
+    left unused)."""
     pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-augmented")
-    future = pool.submit(lambda: fit_augmented(train, test, axis, list(effects), cutoff,
-                                               baseline.result()))
+    future = pool.submit(fit_augmented, train, test, axis, list(effects), cutoff)
     pool.shutdown(wait=False)
     return future
 
 
 class EarlyFits:
-    """The augmented models' fits started before the verdict is known (`start_augmented`,
-    once `baseline`, `start_baseline`'s future, is done), by the effects they fit:
-    `simulation_gap` takes the one for the verdict's effects (`get`; `None`: none started)."""
+    """The augmented models' fits started before the verdict is known (`start_augmented`),
+    by the effects they fit: `simulation_gap` takes the one for the verdict's effects
+    (`get`; `None`: none started)."""
 
     def __init__(self, train: Sequence[Flight], test: Sequence[Flight], axis: str,
-                 cutoff: float, baseline: Future):
-        self.args, self.cutoff, self.baseline = (train, test, axis), cutoff, baseline
+                 cutoff: float):
+        self.args, self.cutoff = (train, test, axis), cutoff
         self.started: dict[str, Future] = {}
 
     def start(self, effects: Sequence[tuple[str, object]]) -> None:
         self.started[repr(list(effects))] = start_augmented(*self.args, list(effects),
-                                                            self.cutoff, self.baseline)
+                                                            self.cutoff)
 
     def get(self, effects: Sequence[tuple[str, object]]) -> Future | None:
         return self.started.get(repr(list(effects)))
@@ -163,8 +164,7 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     else:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            after_id, failed, fit_warnings = fit_augmented(train, test, axis, effects, cutoff,
-                                                           before_id)
+            after_id, failed, fit_warnings = fit_augmented(train, test, axis, effects, cutoff)
     before = _rms_by_state(before_id, states)
     after = _rms_by_state(after_id, states) if after_id is not None else dict(before)
     base_ok = bool(all(f.converged for f in before_id.fits))

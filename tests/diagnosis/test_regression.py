@@ -42,3 +42,23 @@ def test_solve_sums_units():
         b = np.concatenate([units[i][2](units[i][1]) for i in idx])
         ref, *_ = np.linalg.lstsq(a, b, rcond=None)
         assert np.allclose(solve([parts[i] for i in idx])[0], ref, rtol=1e-9, atol=1e-12)
+
+
+def test_solve_stack_solves_each_member_as_lstsq_does():
+    """Leave-one-unit-out fits solved as one stack equal `np.linalg.lstsq` on each member,
+    also where a column is dead in one member only (solved one by one) and where the
+    Gram matrix is singular (a repeated column: the minimum-norm solution)."""
+    from fwid.diagnosis._regression import solve_stack
+
+    rng = np.random.default_rng(3)
+    designs = [rng.normal(size=(200, 4)) for _ in range(4)]
+    designs[1][:, 2] = designs[1][:, 0]  # singular in that member
+    designs[3][:, 1] = 0.0  # a column dead in one member only
+    ys = [rng.normal(size=200) for _ in designs]
+    for stack in (designs[:3], designs):
+        ata = np.stack([g.T @ g for g in stack])
+        atb = np.stack([g.T @ y for g, y in zip(stack, ys)])
+        theta = solve_stack(ata, atb)
+        for g, y, th in zip(stack, ys, theta):
+            ref, *_ = np.linalg.lstsq(g, y, rcond=None)
+            assert np.allclose(th, ref, rtol=1e-8, atol=1e-10)

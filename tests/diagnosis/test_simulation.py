@@ -171,8 +171,8 @@ def test_an_augmented_model_that_diverges_is_recorded_not_raised(effect_flights,
 
 def test_the_augmented_fit_started_early_gives_the_same_block(effect_flights):
     """`start_augmented` (the fit begun in a worker thread when the selection's first round
-    has its leader, the baseline still running) and the fit made after the verdict give one
-    simulation block, to the digit."""
+    has its leader, beside the baseline's fit, which it does not wait for) and the fit made
+    after the verdict give one simulation block, to the digit."""
     from concurrent.futures import ThreadPoolExecutor
 
     from fwid.diagnosis._simulation import fit_baseline, start_augmented
@@ -182,7 +182,7 @@ def test_the_augmented_fit_started_early_gives_the_same_block(effect_flights):
     effects = [("actuator-dynamics", ("lag", 0.05))]
     with ThreadPoolExecutor(1) as pool:
         baseline = pool.submit(fit_baseline, train, test, "lon")
-        early = start_augmented(train, test, "lon", effects, 5.0, baseline)
+        early = start_augmented(train, test, "lon", effects, 5.0)
         late = simulation_gap(train, test, "lon", effects, baseline=baseline.result())
         made_early = simulation_gap(train, test, "lon", effects, baseline=baseline.result(),
                                     augmented=early)
