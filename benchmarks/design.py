@@ -12,7 +12,13 @@ identified with `fwid.identify`. Reported per input: the predicted Cramer-Rao st
 12 derivatives (the identified model's information for that input), the fit's std, and the
 actual error over seeds; geometric means over the derivatives of ratios to the design.
 
-    python benchmarks/design.py [--quick] [--part inputs|discrimination|all]
+    python benchmarks/design.py [--quick] [--part inputs|discrimination|ceiling|all]
+
+Ceiling (`--part ceiling`, `design_ceiling.{json,md}`): how far above a 3211 any input gets
+on these models, by searching harder than the default: no attitude bound (only the peak
+amplitude), twice the switching rate and four times the restarts; at the benchmark's 5 s and
+at 8 s. For a model linear in the input and no attitude bound the ratio does not depend on
+the amplitude (both informations scale with its square).
 
 Discrimination (`--part discrimination`, seeds `--first-seed`.. , 4 or `--quick` 1): for
 three (true effect, rival) pairs, a weak effect on two short training and two test flights
@@ -48,6 +54,12 @@ DESIGNS = {"designed steps 10 Hz": dict(parametrisation="steps", switch_rate=10.
            "designed steps 5 Hz": dict(parametrisation="steps", switch_rate=5.0),
            "designed multisine": dict(parametrisation="multisine")}
 REFERENCE = "designed steps 10 Hz"
+#: The searches of the ceiling part, each a change to the default design.
+CEILING = {"default": {},
+           "no attitude bound": dict(attitude_limit=None),
+           "no attitude bound, 20 Hz steps, 64 restarts": dict(attitude_limit=None,
+                                                                switch_rate=20.0, restarts=64)}
+CEILING_DURATIONS = (5.0, 8.0)
 AMPLITUDE, DURATION, QUIET = 0.13, 5.0, 1.0
 
 
@@ -349,6 +361,45 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             "right_3211": sum(r["verdict_3211"] == r["true"] for r in amb)}
 
 
+def run_ceiling(out: Path, log) -> dict:
+    """The predicted geometric-mean std ratio (3211 / designed) of each `CEILING` search, per
+    simulator and length, from the model identified on the same 3211 flight as the inputs
+    part."""
+    res = {}
+    for sim, fly in SIMULATORS.items():
+        grid = Grid(DURATION, QUIET, 200.0 if sim == "embedded" else IND_RATE)
+        flight, _ = fly(grid.t, CLASSIC["3211"](grid, AMPLITUDE), 1000, out)
+        ident = fwid.identify([flight], "lon")
+        for duration in CEILING_DURATIONS:
+            for label, kw in CEILING.items():
+                t0 = time.perf_counter()
+                d = fwid.design_input(ident, duration=duration, amplitude=AMPLITUDE,
+                                      quiet=QUIET, rate=100.0, **kw)
+                ratio = float(d.to_json()["geometric_mean_ratio"])
+                res.setdefault(sim, {}).setdefault(f"{duration:g}", {})[label] = {
+                    "ratio": ratio, "seconds": time.perf_counter() - t0}
+                log(f"ceiling: {sim}, {duration:g} s, {label}: {ratio:.3f}")
+    return res
+
+
+def markdown_ceiling(res: dict) -> str:
+    labels = list(CEILING)
+    lines = ["# How far above a 3211: the designs' predicted gain under harder searches", "",
+             f"Predicted geometric-mean std ratio over the 12 derivatives, window-filling 3211 / "
+             f"designed input, {AMPLITUDE:g} rad peak, {QUIET:g} s quiet start; the model "
+             "identified from one 3211 flight (seed 1000) of each simulator. Searches: "
+             "`default` (steps at 10 Hz, 16 restarts, the 3211's attitude excursion kept); "
+             "then without the attitude bound; then also twice the switching rate and four "
+             "times the restarts.", "",
+             "| simulator | length s | " + " | ".join(labels) + " |",
+             "|---|---:|" + "---:|" * len(labels)]
+    for sim, by_len in res.items():
+        for dur, row in by_len.items():
+            lines.append(f"| {sim} | {dur} | " + " | ".join(
+                f"{row[k]['ratio']:.3f} ({row[k]['seconds']:.0f} s)" for k in labels) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def markdown(header: list[str], results: dict) -> str:
     lines = header + ["", "Geometric means over the 12 derivatives of the ratio input / "
                       f"{REFERENCE} (above 1: worse than it): of the predicted (Cramer-Rao) "
@@ -429,7 +480,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="3 seeds (default 8)")
     ap.add_argument("--seeds", type=int, default=None, help="number of seeds")
     ap.add_argument("--simulators", nargs="+", default=list(SIMULATORS))
-    ap.add_argument("--part", choices=("inputs", "discrimination", "all"), default="all")
+    ap.add_argument("--part", choices=("inputs", "discrimination", "ceiling", "all"),
+                    default="all")
     ap.add_argument("--first-seed", type=int, default=0,
                     help="first seed (discrimination's settings were chosen on 100-103)")
     ap.add_argument("--added-duration", type=float, default=None,
@@ -451,6 +503,18 @@ def main(argv=None) -> int:
         print(f"design benchmark: {msg}", flush=True)
 
     results, disc = {}, None
+    if args.part == "ceiling":
+        with tempfile.TemporaryDirectory() as tmp:
+            ceiling = run_ceiling(Path(tmp), log)
+        from fwid.report._json import write_json, write_text
+
+        RESULTS.mkdir(exist_ok=True)
+        write_json(RESULTS / "design_ceiling.json", _provenance.stamped(
+            {"amplitude_rad": AMPLITUDE, "quiet_s": QUIET, "results": ceiling}, prov))
+        text = _provenance.markdown(markdown_ceiling(ceiling), prov)
+        write_text(RESULTS / "design_ceiling.md", text)
+        print(text)
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         if args.part in ("inputs", "all"):
             for sim in args.simulators:
