@@ -192,7 +192,7 @@ def test_the_augmented_fit_started_early_gives_the_same_block(effect_flights):
     assert made_early.summary["warnings"] == late.summary["warnings"]
 
 
-def test_a_diverging_simulation_gives_no_shrink(monkeypatch):
+def test_a_diverging_simulation_gives_no_shrink():
     """A simulated state whose error is over ten times the measured signal's RMS has run away
     (an unstable identified model, open loop): such states are named, and `simulation_gap`
     then gives no shrink (a ratio of two huge numbers) but a message; a misfit is not named."""
@@ -202,3 +202,31 @@ def test_a_diverging_simulation_gives_no_shrink(monkeypatch):
         measured={"q": np.sin(np.arange(100.0))}, simulated={"q": 1e6 * np.ones(100)})])
     assert _simulation._diverged(ident, {"q": 1e6}) == ["q"]
     assert _simulation._diverged(ident, {"q": 0.5}) == []
+
+    # the whole block: the augmented model's simulation runs away on the test flights
+    from concurrent.futures import Future
+
+    states = list(_simulation.get_model("lon").outputs)
+    x = np.sin(np.arange(200.0) / 7.0)
+
+    def identification(error):
+        return types.SimpleNamespace(
+            fits=[types.SimpleNamespace(converged=True, warnings=[])],
+            validation=[types.SimpleNamespace(measured={s: x for s in states},
+                                              simulated={s: x + error for s in states})])
+    before, after = identification(0.1 * x), identification(1e6)
+    augmented = Future()
+    augmented.set_result((after, None, []))
+    effects = [("nonlinear-aero", None)]
+    block = _simulation.simulation_gap([], [], "lon", effects, baseline=before,
+                                       augmented=augmented).summary
+    assert block["shrink_pct"] is None
+    assert block["diverged"] == sorted(states)
+    assert "diverges" in block["message"]
+    # the same block with a sane augmented simulation gives its shrink: 1 - 0.05 / 0.1
+    augmented = Future()
+    augmented.set_result((identification(0.05 * x), None, []))
+    block = _simulation.simulation_gap([], [], "lon", effects, baseline=before,
+                                       augmented=augmented).summary
+    assert block["diverged"] == [] and "message" not in block
+    assert abs(block["shrink_pct"] - 50.0) < 1e-9
