@@ -145,13 +145,17 @@ def predicted_std(ident, t, u):
     return {k: float(v) for k, v in zip(names, std)}
 
 
+def identified(sim: str, out: Path):
+    """The benchmark's time grid of simulator `sim` and the model `fwid.identify` gives from
+    one window-filling 3211 flight of it (seed 1000): what the designs start from."""
+    grid = Grid(DURATION, QUIET, 200.0 if sim == "embedded" else IND_RATE)
+    flight, _ = SIMULATORS[sim](grid.t, CLASSIC["3211"](grid, AMPLITUDE), 1000, out)
+    return grid, fwid.identify([flight], "lon")
+
+
 def run_simulator(sim: str, seeds, out: Path, log) -> dict:
     fly = SIMULATORS[sim]
-    rate = 200.0 if sim == "embedded" else IND_RATE
-    grid = Grid(DURATION, QUIET, rate)
-    # 1. identify from one 3211 flight, 2. design from it
-    flight, truth = fly(grid.t, CLASSIC["3211"](grid, AMPLITUDE), 1000, out)
-    ident = fwid.identify([flight], "lon")
+    grid, ident = identified(sim, out)  # 1. identify from one 3211 flight, 2. design from it
     inputs, res = {}, {"design_s": {}, "design": {}, "inputs": {}}
     for label, kw in DESIGNS.items():
         t0 = time.perf_counter()
@@ -361,15 +365,13 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             "right_3211": sum(r["verdict_3211"] == r["true"] for r in amb)}
 
 
-def run_ceiling(out: Path, log) -> dict:
+def run_ceiling(sims, out: Path, log) -> dict:
     """The predicted geometric-mean std ratio (3211 / designed) of each `CEILING` search, per
-    simulator and length, from the model identified on the same 3211 flight as the inputs
-    part."""
+    simulator of `sims` and length, from the model identified on the same 3211 flight as the
+    inputs part."""
     res = {}
-    for sim, fly in SIMULATORS.items():
-        grid = Grid(DURATION, QUIET, 200.0 if sim == "embedded" else IND_RATE)
-        flight, _ = fly(grid.t, CLASSIC["3211"](grid, AMPLITUDE), 1000, out)
-        ident = fwid.identify([flight], "lon")
+    for sim in sims:
+        _, ident = identified(sim, out)
         for duration in CEILING_DURATIONS:
             for label, kw in CEILING.items():
                 t0 = time.perf_counter()
@@ -502,18 +504,21 @@ def main(argv=None) -> int:
     def log(msg):
         print(f"design benchmark: {msg}", flush=True)
 
-    results, disc = {}, None
-    if args.part == "ceiling":
-        with tempfile.TemporaryDirectory() as tmp:
-            ceiling = run_ceiling(Path(tmp), log)
+    def write(name: str, doc: dict, text: str) -> None:
         from fwid.report._json import write_json, write_text
 
         RESULTS.mkdir(exist_ok=True)
-        write_json(RESULTS / "design_ceiling.json", _provenance.stamped(
-            {"amplitude_rad": AMPLITUDE, "quiet_s": QUIET, "results": ceiling}, prov))
-        text = _provenance.markdown(markdown_ceiling(ceiling), prov)
-        write_text(RESULTS / "design_ceiling.md", text)
+        write_json(RESULTS / f"{name}.json", _provenance.stamped(doc, prov))
+        text = _provenance.markdown(text, prov)
+        write_text(RESULTS / f"{name}.md", text)
         print(text)
+
+    results, disc = {}, None
+    if args.part == "ceiling":
+        with tempfile.TemporaryDirectory() as tmp:
+            ceiling = run_ceiling(args.simulators, Path(tmp), log)
+        write("design_ceiling", {"amplitude_rad": AMPLITUDE, "quiet_s": QUIET,
+                                 "results": ceiling}, markdown_ceiling(ceiling))
         return 0
     with tempfile.TemporaryDirectory() as tmp:
         if args.part in ("inputs", "all"):
@@ -526,13 +531,10 @@ def main(argv=None) -> int:
             out.mkdir()
             disc = run_discrimination(disc_seeds, out, log)
     name = "design_discrimination" if args.part == "discrimination" else "design"
-    RESULTS.mkdir(exist_ok=True)
     doc = {"seeds": seeds, "discrimination_seeds": disc_seeds if disc is not None else None,
            "amplitude_rad": AMPLITUDE, "duration_s": DURATION, "quiet_s": QUIET,
            "derivatives": DERIVS, "results": results,
            "discrimination": disc}
-    from fwid.report._json import write_json, write_text
-
     text = markdown(["# Designed vs classic inputs"], results) if results else \
         "# Telling two effects apart\n"
     if disc is not None:
@@ -540,10 +542,7 @@ def main(argv=None) -> int:
     else:
         text += ("\nDiscrimination: `--part discrimination` writes "
                  "`design_discrimination.{json,md}`.\n")
-    write_json(RESULTS / f"{name}.json", _provenance.stamped(doc, prov))
-    text = _provenance.markdown(text, prov)
-    write_text(RESULTS / f"{name}.md", text)
-    print(text)
+    write(name, doc, text)
     return 0
 
 

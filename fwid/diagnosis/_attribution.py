@@ -31,8 +31,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._catalogue import CATALOGUE, Effect, axis_of, base_columns
-from ._regression import (Projector, harmonic_series, local_design, normal_equations,
-                          residual, solve, solve_stack)
+from ._regression import (Projector, error, harmonic_series, local_design,
+                          normal_equations, residual, solve, solve_stack)
 from ._signals import Signals
 
 Model = tuple  # of (Effect, variant) pairs
@@ -244,10 +244,9 @@ class Engine:
         key = (tuple(idx), channel, tuple((e.name, v) for e, v in acting(model, channel)))
         if key not in self._loo:
             parts = [self.normal_equations(i, channel, model) for i in idx]
-            A, b = np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
+            A, b, c = (np.stack([p[j] for p in parts]) for j in range(3))
             th = solve_stack(A.sum(0) - A, b.sum(0) - b)  # each unit left out in turn
-            sse = np.array([p[2] for p in parts]) - 2.0 * np.einsum("uk,uk->u", th, b)
-            self._loo[key] = float(np.sum(sse + np.einsum("uk,ukl,ul->u", th, A, th)))
+            self._loo[key] = float(np.sum(error((A, b, c), th)))
         return self._loo[key]
 
     def block_errors(self, fit_idx, score_idx, model: Model, band: str) -> np.ndarray:

@@ -80,7 +80,7 @@ def solve(parts: Sequence[tuple[np.ndarray, np.ndarray, float]]) -> tuple[np.nda
     atb = sum(p[1] for p in parts)
     btb = float(sum(p[2] for p in parts))
     theta = solve_stack(np.asarray(ata)[None], np.asarray(atb)[None])[0]
-    return theta, max(error((ata, atb, btb), theta), 0.0)
+    return theta, max(float(error((ata, atb, btb), theta)), 0.0)
 
 
 def solve_stack(ata: np.ndarray, atb: np.ndarray) -> np.ndarray:
@@ -111,11 +111,13 @@ def solve_stack(ata: np.ndarray, atb: np.ndarray) -> np.ndarray:
     return theta
 
 
-def error(part: tuple[np.ndarray, np.ndarray, float], theta: np.ndarray) -> float:
+def error(part: tuple[np.ndarray, np.ndarray, float], theta: np.ndarray):
     """`|b - A theta|^2` from normal equations `(A^T A, A^T b, b^T b)` (one unit's, or a sum):
-    a fit's training error, or a unit's error under a fit to other units."""
+    a fit's training error, or a unit's error under a fit to other units. Over stacks too:
+    `(s, k, k)`, `(s, k)`, `(s,)` and `theta` `(s, k)` give the `(s,)` errors."""
     ata, atb, btb = part
-    return btb - 2.0 * float(theta @ atb) + float(theta @ ata @ theta) if len(atb) else btb
+    return (btb - 2.0 * np.einsum("...k,...k->...", theta, atb)
+            + np.einsum("...k,...kl,...l->...", theta, ata, theta))
 
 
 def residual(design: np.ndarray, target: np.ndarray, projector: Projector, theta) -> np.ndarray:
