@@ -24,7 +24,7 @@ import numpy as np
 from jaxtyping import Float
 
 from ._model import HARMONICS
-from ._smoother import _cycle_mean
+from ._smoother import _cycle_mean, cycle_samples
 
 
 def coefficient_variance(sigma: Float[np.ndarray, " c"], samples: int) -> Float[np.ndarray, " c"]:
@@ -51,7 +51,7 @@ def shrink_harmonics(series: list, phase: Float[np.ndarray, " n"], omega: Float[
     if not np.isfinite(omega).any():
         return list(series), np.ones_like(variance)
     good = np.all(np.isfinite(y), 1) & np.isfinite(omega)
-    cycle = max(1, int(round(2 * np.pi / (np.nanmedian(omega) * dt))))
+    cycle = max(1, cycle_samples(omega, dt, 1))
     fast = y - _cycle_mean(y, cycle)
     edge = min(2 * cycle, len(y) // 4)  # where the average's edges leave slow motion in `fast`
     good[:edge] = good[len(y) - edge:] = False

@@ -87,6 +87,13 @@ def _fns():
     return _JIT
 
 
+def cycle_samples(omega: np.ndarray, dt: float, default: int) -> int:
+    """Samples in one flapping cycle at the median of the angular frequency `omega` (rad/s),
+    or `default` where it has no finite positive value."""
+    w0 = np.nanmedian(omega) if np.isfinite(omega).any() else np.nan
+    return int(round(2 * np.pi / (w0 * dt))) if np.isfinite(w0) and w0 > 0 else default
+
+
 def _cycle_mean(y: np.ndarray, w: int) -> np.ndarray:
     """`y` `(N, c)` averaged over `w` samples, twice (centred, edges held): the flapping
     harmonics of a period of about `w` samples cancel, the slow motion stays. With `w` even
@@ -115,8 +122,8 @@ def _active_window(z, u, mask, dt, lengths=None, omega=None) -> np.ndarray:
     out = np.empty((M, W), int)
     for m in range(M):
         L = int(lengths[m])  # this problem's own samples
-        w0 = np.nanmedian(omega[m, :L]) if omega is not None else np.nan
-        k = int(round(2 * np.pi / (w0 * dt))) if np.isfinite(w0) and w0 > 0 else int(round(0.1 / dt))
+        k = cycle_samples(np.full(L, np.nan) if omega is None else omega[m, :L], dt,
+                          int(round(0.1 / dt)))
         k = max(1, min(k, L // 8))
         y = path[m, :L]
         good = np.isfinite(y[:, 0])
