@@ -3,10 +3,12 @@
 The explanations are the baseline alone (`none`), each catalogue entry and probe alone, the
 pairs of the catalogue entries that gain most alone (`PAIR_POOL`; ordered by that gain, an
 entry built on states' rates first or not at all, as in `_selection.py`), and the effects the
-forward selection chose together. The best explanation gives the verdict (its first effect). Each is scored, as the selection's evidence is
-(`_significance.py`), by the cross-fit: on every scoring block of about a second, the model
-fitted on the other flights gives, per band, the held-out sum of squares pooled over the loads
-(each scaled by the baseline's training mean square `s_l`), and the block's loss is
+forward selection chose together, up to its first probe (an entry after a probe only echoes
+it). The best explanation gives the verdict (its first effect). Each is scored, as the
+selection's evidence is (`_significance.py`), by the cross-fit: on every scoring block of
+about a second, the model fitted on the other flights gives, per band, the held-out sum of
+squares pooled over the loads (each scaled by the baseline's training mean square `s_l`), and
+the block's loss is
 
     L_j(m) = sum_band log( sum_l SSE_j,l,band(m) / s_l ),
 
@@ -161,8 +163,8 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
     entries and probes), `chosen` (the forward selection's effects, in order), `pair_pool`.
 
     **Returns:** the explanations, `none` first, then the single ones, the pairs and the
-    selection's model; one whose losses equal an earlier one's (a second effect that acts on
-    no load) is left out.
+    selection's model up to its first probe; one whose losses equal an earlier one's (a
+    second effect that acts on no load) is left out.
     """
     cache: dict = {}
     base = Explanation((), _block_losses(engine, halves, [() for _ in halves], cache))
@@ -176,8 +178,13 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
     # picks up that effect's leftover misfit on the other loads, significantly and by more
     # than its charge: measured on flap-frequency flights, `tests/diagnosis/test_diagnose.py`)
     groups = [tuple(p) for p in itertools.combinations(gaining, 2) if not p[1].rates]
-    if len(chosen) > 1 and tuple(chosen) not in groups:
-        groups.append(tuple(chosen))
+    # the selection's effects up to its first probe: an entry after a probe only echoes it
+    # (`_diagnose.py` reports it so, under `unexplained`), as the rates' entry after another
+    # effect picks up that effect's leftover misfit
+    upto = next((k + 1 for k, e in enumerate(chosen) if e.probe), len(chosen))
+    chosen = tuple(chosen)[:upto]
+    if len(chosen) > 1 and chosen not in groups:
+        groups.append(chosen)
     for group in groups:
         models = []
         for half, v in zip(halves, first[group[0].name].variants):

@@ -155,3 +155,37 @@ def test_nonlinear_aero_keeps_the_single_quadratic_term(effect_flights, tmp_path
     model, _, _ = augment("lon", [("nonlinear-aero", (2,))])
     assert {p for p in model.free if p.endswith("_ww")} == {"X_ww", "Z_ww", "M_ww"}
     assert not any(p.endswith("_uu") or p.endswith("_wq") for p in model.free)
+
+
+def test_an_entry_after_a_probe_is_no_explanation():
+    """The forward selection chose a probe, then a catalogue entry: that entry only echoes the
+    probe (`unexplained` reports it so), so the set's explanations hold the probe alone; an
+    entry before a probe stays with it."""
+    from fwid.diagnosis._confidence import explanations
+    from fwid.diagnosis._significance import Half
+
+    def effect(name, probe=False):
+        return SimpleNamespace(name=name, band="averaged", rates=False, probe=probe)
+
+    att, nl, act = effect("attitude", probe=True), effect("nonlinear-aero"), effect("actuator")
+
+    class Engine:  # each effect lowers every block's error by its own factor
+        factor = {"attitude": 0.7, "nonlinear-aero": 0.9, "actuator": 0.95}
+
+        def channels(self, band):
+            return [("M", band)]
+
+        def block_errors(self, fit, score, model, band):
+            f = np.prod([self.factor[e.name] for e, _ in model]) if band == "averaged" else 1.0
+            return np.full((len(score), 1), f) * (1.0 + 0.01 * np.arange(len(score)))[:, None]
+
+        def choose(self, idx, model, e, sigma2):
+            return None
+
+    halves = [Half((0,), (1, 2, 3), {("M", "averaged"): 1.0, ("M", "flapping"): 1.0})]
+    first = {e.name: SimpleNamespace(variants=(None,), mean=-np.log(Engine.factor[e.name]))
+             for e in (att, nl, act)}
+    found = explanations(Engine(), halves, first, [att, nl, act], chosen=[att, nl])
+    assert [x.names for x in found if att in x.effects] == [["attitude"]]
+    found = explanations(Engine(), halves, first, [att, nl, act], chosen=[nl, act, att])
+    assert ["nonlinear-aero", "actuator", "attitude"] in [x.names for x in found]
