@@ -16,8 +16,8 @@ on the loads seen through the other loads' rates is explained less well by the r
 directly), otherwise it competes with the rest on its gain; and it may enter only as the
 first effect: once another effect is in, it picks up that effect's leftover misfit on the
 other loads and would name a second effect that is not there. The confidence set
-(`_confidence.py`) does not use these rules: it keeps a pair with the rates' entry when the
-held-out blocks cannot reject it, which is what the user is told.
+(`_confidence.py`) does not use the margin: it holds the rates' entry alone, beside the other
+explanations the held-out blocks cannot reject, which is what the user is told.
 """
 
 from __future__ import annotations

@@ -157,35 +157,53 @@ def test_nonlinear_aero_keeps_the_single_quadratic_term(effect_flights, tmp_path
     assert not any(p.endswith("_uu") or p.endswith("_wq") for p in model.free)
 
 
+class _Engine:
+    """A stub of the attribution's engine: each effect lowers every block's error by its own
+    factor (`FACTOR`), whatever it is paired with."""
+
+    FACTOR = {"attitude": 0.7, "nonlinear-aero": 0.9, "actuator": 0.95, "unsteady-aero": 0.8}
+
+    def channels(self, band):
+        return [("M", band)]
+
+    def block_errors(self, fit, score, model, band):
+        f = np.prod([self.FACTOR[e.name] for e, _ in model]) if band == "averaged" else 1.0
+        return np.full((len(score), 1), f) * (1.0 + 0.01 * np.arange(len(score)))[:, None]
+
+    def choose(self, idx, model, e, sigma2):
+        return None
+
+
+def _stub_explanations(chosen):
+    from fwid.diagnosis._confidence import explanations
+    from fwid.diagnosis._significance import Half
+
+    def effect(name, probe=False, rates=False):
+        return SimpleNamespace(name=name, band="averaged", rates=rates, probe=probe)
+
+    by = {"attitude": effect("attitude", probe=True), "nonlinear-aero": effect("nonlinear-aero"),
+          "actuator": effect("actuator"), "unsteady-aero": effect("unsteady-aero", rates=True)}
+    halves = [Half((0,), (1, 2, 3), {("M", "averaged"): 1.0, ("M", "flapping"): 1.0})]
+    first = {n: SimpleNamespace(variants=(None,), mean=-np.log(f))
+             for n, f in _Engine.FACTOR.items()}
+    return [x.names for x in explanations(_Engine(), halves, first, list(by.values()),
+                                          chosen=[by[n] for n in chosen])]
+
+
 def test_an_entry_after_a_probe_is_no_explanation():
     """The forward selection chose a probe, then a catalogue entry: that entry only echoes the
     probe (`unexplained` reports it so), so the set's explanations hold the probe alone; an
     entry before a probe stays with it."""
-    from fwid.diagnosis._confidence import explanations
-    from fwid.diagnosis._significance import Half
+    found = _stub_explanations(["attitude", "nonlinear-aero"])
+    assert [x for x in found if "attitude" in x] == [["attitude"]]
+    found = _stub_explanations(["nonlinear-aero", "actuator", "attitude"])
+    assert ["nonlinear-aero", "actuator", "attitude"] in found
 
-    def effect(name, probe=False):
-        return SimpleNamespace(name=name, band="averaged", rates=False, probe=probe)
 
-    att, nl, act = effect("attitude", probe=True), effect("nonlinear-aero"), effect("actuator")
-
-    class Engine:  # each effect lowers every block's error by its own factor
-        factor = {"attitude": 0.7, "nonlinear-aero": 0.9, "actuator": 0.95}
-
-        def channels(self, band):
-            return [("M", band)]
-
-        def block_errors(self, fit, score, model, band):
-            f = np.prod([self.factor[e.name] for e, _ in model]) if band == "averaged" else 1.0
-            return np.full((len(score), 1), f) * (1.0 + 0.01 * np.arange(len(score)))[:, None]
-
-        def choose(self, idx, model, e, sigma2):
-            return None
-
-    halves = [Half((0,), (1, 2, 3), {("M", "averaged"): 1.0, ("M", "flapping"): 1.0})]
-    first = {e.name: SimpleNamespace(variants=(None,), mean=-np.log(Engine.factor[e.name]))
-             for e in (att, nl, act)}
-    found = explanations(Engine(), halves, first, [att, nl, act], chosen=[att, nl])
-    assert [x.names for x in found if att in x.effects] == [["attitude"]]
-    found = explanations(Engine(), halves, first, [att, nl, act], chosen=[nl, act, att])
-    assert ["nonlinear-aero", "actuator", "attitude"] in [x.names for x in found]
+def test_the_rates_entry_stands_alone():
+    """`unsteady-aero` (built on states' rates) is an explanation alone, never beside another
+    effect, whichever gains more and whatever the selection chose; the other entries pair."""
+    for chosen in (["unsteady-aero", "nonlinear-aero"], ["nonlinear-aero", "actuator"]):
+        found = _stub_explanations(chosen)
+        assert [x for x in found if "unsteady-aero" in x] == [["unsteady-aero"]]
+        assert ["nonlinear-aero", "actuator"] in found
