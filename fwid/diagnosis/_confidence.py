@@ -68,8 +68,9 @@ from ._significance import Evidence, Half, evidence
 LEVEL = 0.10
 #: Bootstrap resamples of the blocks.
 RESAMPLES = 2000
-#: Pairs are formed from this many catalogue entries, those with the largest held-out gain
-#: alone (a positive one): a pair both of whose members explain nothing alone is not tried.
+#: Pairs are formed from this many catalogue entries not built on states' rates, those with
+#: the largest held-out gain alone (a positive one): a pair both of whose members explain
+#: nothing alone is not tried.
 PAIR_POOL = 4
 
 

@@ -167,10 +167,11 @@ def diagnose(
        held-out gain relative to the first's (`relative_gain`).
        How sure the choice is, the **confidence set** says (`_confidence.py`): every
        explanation (none, each candidate or probe, the pairs of the best four, the
-       selection's model; `unsteady-aero` alone only) that the held-out blocks cannot reject against the best at
-       `_confidence.LEVEL` (Hansen, Lunde & Nason's model confidence set), best first, each
-       with its held-out gain and p value (`confidence_set`). Two or more kept: the data
-       cannot tell them apart; a pair kept: both effects may be there.
+       selection's model; `unsteady-aero` alone only) that the held-out blocks cannot
+       reject against the best at `_confidence.LEVEL` (Hansen, Lunde & Nason's model
+       confidence set), best first, each with its held-out gain and p value
+       (`confidence_set`). Two or more kept: the data cannot tell them apart; a pair
+       kept: both effects may be there.
     2. **How far**: baseline and candidates are re-fitted on the training flights only and
        scored on the test flights: RMS per load before and after, and `shrink_pct`, the drop
        of the RMS of the affected loads (each relative to its baseline RMS).
