@@ -27,8 +27,8 @@ if each effect had to earn that gain (an interval null: "at least 2 % better", n
 Without the charge the held-out loss is not a fair judge of the rates' entry: the rates of
 the other states carry a little of the load's own noise through the kinematic terms, so on
 clean flights `unsteady-aero` gains a fraction of a per cent held out, significantly over
-tens of blocks, and rides along with every real effect as a pair (measured on simulated
-6 + 6 flights, `tests/diagnosis/test_confidence.py`).
+tens of blocks, and would be preferred to `none` (measured on simulated 6 + 6 flights,
+`tests/diagnosis/test_confidence.py`).
 
 The set is Hansen, Lunde & Nason's *model confidence set* (Econometrica 79, 2011, 453-497)
 with their `T_max` statistic: while the live models differ significantly (the largest
