@@ -120,10 +120,10 @@ def _active_window(z, u, mask, dt, lengths=None, omega=None) -> np.ndarray:
     lengths = np.full(M, N) if lengths is None else np.asarray(lengths, int)
     path = np.where(mask[..., None], z, np.nan) - np.cumsum(u, axis=1)
     out = np.empty((M, W), int)
+    without = int(round(0.1 / dt))  # the cycle's samples without a flapping frequency
     for m in range(M):
         L = int(lengths[m])  # this problem's own samples
-        k = cycle_samples(np.full(L, np.nan) if omega is None else omega[m, :L], dt,
-                          int(round(0.1 / dt)))
+        k = without if omega is None else cycle_samples(omega[m, :L], dt, without)
         k = max(1, min(k, L // 8))
         y = path[m, :L]
         good = np.isfinite(y[:, 0])
