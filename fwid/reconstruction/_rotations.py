@@ -141,6 +141,33 @@ def euler_to_matrix(phi, theta, psi) -> np.ndarray:
     ], -2)
 
 
+def axis_rotation(axis: str, angle) -> np.ndarray:
+    """Matrices `(..., 3, 3)` of right-handed rotations by `angle` (rad) about body axis
+    `axis` (`"X"`, `"Y"` or `"Z"`)."""
+    a = np.asarray(angle, dtype=float)
+    c, s, o, z = np.cos(a), np.sin(a), np.ones_like(a), np.zeros_like(a)
+    rows = {"X": [[o, z, z], [z, c, -s], [z, s, c]],
+            "Y": [[c, z, s], [z, o, z], [-s, z, c]],
+            "Z": [[c, -s, z], [s, c, z], [z, z, o]]}[axis.upper()]
+    return np.stack([np.stack(r, -1) for r in rows], -2)
+
+
+def euler_to_matrix_ordered(angles: np.ndarray, order: str) -> np.ndarray:
+    """Body -> Earth matrices of Euler angles `(..., 3)` (rad) about the body's x, y and z
+    axes (roll, pitch, yaw), applied as intrinsic rotations in `order`: `"ZYX"` is
+    `Rz(yaw) Ry(pitch) Rx(roll)` (3-2-1, [`euler_to_matrix`][]), `"XYZ"` is
+    `Rx(roll) Ry(pitch) Rz(yaw)`, and so on for the six orders of three distinct axes."""
+    order = order.upper()
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ValueError(f"Euler order {order!r}: three distinct axes of X, Y, Z expected")
+    angles = np.asarray(angles, dtype=float)
+    R = None
+    for ax in order:
+        Ri = axis_rotation(ax, angles[..., "XYZ".index(ax)])
+        R = Ri if R is None else R @ Ri
+    return R
+
+
 def to_ned(pos: np.ndarray, R: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
     """Positions `(n, 3)` and body -> world matrices `(n, 3, 3)` of a tracking `frame`
     (`FRAMES`) in north-east-down, world and body axes alike: `x_ned = C x`,

@@ -33,3 +33,25 @@ def test_continuous_sign_and_frames():
     assert np.allclose(p, [[1.0, 3.0, -2.0]]) and np.allclose(R, np.eye(3))
     p, _ = rot.to_ned(np.array([[1.0, 2.0, 3.0]]), np.eye(3)[None], "z-up")
     assert np.allclose(p, [[1.0, -2.0, -3.0]])
+
+
+def test_euler_orders_against_axis_products():
+    """Each of the six intrinsic orders is the product of single-axis rotations in that
+    order; ZYX is the 3-2-1 convention of euler_to_matrix."""
+    from fwid.reconstruction._rotations import (
+        axis_rotation, euler_to_matrix, euler_to_matrix_ordered)
+
+    rng = np.random.default_rng(3)
+    a = rng.uniform(-1.2, 1.2, (7, 3))
+    np.testing.assert_allclose(euler_to_matrix_ordered(a, "zyx"),
+                               euler_to_matrix(a[:, 0], a[:, 1], a[:, 2]), atol=1e-14)
+    for order in ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"):
+        R = euler_to_matrix_ordered(a, order)
+        ref = np.eye(3)
+        for ax in order:
+            ref = ref @ axis_rotation(ax, a[:, "XYZ".index(ax)])
+        np.testing.assert_allclose(R, ref, atol=1e-14)
+        np.testing.assert_allclose(R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(3), R.shape),
+                                   atol=1e-13)
+    # a rotation about z alone turns x into y (right-handed)
+    np.testing.assert_allclose(axis_rotation("Z", np.pi / 2) @ [1, 0, 0], [0, 1, 0], atol=1e-15)
