@@ -7,7 +7,8 @@ import numpy as np
 
 from .._errors import FlightDataError
 from ._raw import (
-    MAX_DROPOUT, RawTake, check_quaternions, check_time, dropouts, parse_rows, trim_untracked,
+    MAX_DROPOUT, RawTake, check_quaternions, check_time, dropouts, parse_rows, take_name,
+    trim_untracked,
 )
 from ._rotations import continuous_sign, matrix_to_quat, quat_to_matrix, to_ned
 
@@ -62,13 +63,9 @@ def read_fwid_raw(path: str, lines: list[str], frame: str = "ned",
         raise FlightDataError(f"{path}: the body is tracked on fewer than 3 rows")
     t, pos, q, tracked, extras = cut
     gaps = dropouts(t, tracked, path, max_dropout)
-    stem = name or _stem(path)
+    stem = name or take_name(path)
     return RawTake(stem, path, f"fwid raw CSV ({frame})", frame, t, pos, q, tracked, extras,
                    None, gaps, [])
 
 
-def _stem(path) -> str:
-    from pathlib import Path
-
-    return Path(path).name.removesuffix(".csv")
 

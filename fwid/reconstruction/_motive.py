@@ -15,7 +15,7 @@ import numpy as np
 from .._errors import FlightDataError
 from ._raw import (
     MAX_DROPOUT, OnboardLog, RawTake, check_quaternions, check_time, dropouts, parse_rows,
-    trim_untracked,
+    read_lines, take_name, trim_untracked,
 )
 from ._rotations import continuous_sign, matrix_to_quat, quat_to_matrix, to_ned
 
@@ -100,7 +100,7 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
         raise FlightDataError(f"{path}: rigid body {body!r} is tracked on fewer than 3 rows")
     t, pos, q, tracked = cut
     gaps = dropouts(t, tracked, path, max_dropout)
-    name = Path(path).name.removesuffix(".csv")
+    name = take_name(path)
     log = read_onboard(onboard or Path(path).with_name(f"{name}.onboard.csv"), path,
                        given=onboard is not None)
     return RawTake(name, path, f"Motive CSV export (body {body}, {frame}, {units})", frame, t,
@@ -117,7 +117,7 @@ def read_onboard(path, take: str, given: bool = False) -> OnboardLog:
         raise FlightDataError(
             f"{take}: the take has no autopilot log: expected {path.name} beside it (columns "
             f"{','.join(LOG_COLUMNS)}); add it, or give --onboard LOG.csv")
-    lines = path.read_text(encoding="utf-8-sig").splitlines()
+    lines = read_lines(path)
     if not lines:
         raise FlightDataError(f"{path}: empty autopilot log")
     header = [h.strip() for h in lines[0].split(",")]

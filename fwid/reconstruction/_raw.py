@@ -3,8 +3,10 @@ a uniform time base, unit quaternions, dropouts no longer than a stated limit.""
 
 from __future__ import annotations
 
+import gzip
 import io
 import warnings
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -52,6 +54,27 @@ class RawTake(NamedTuple):
     @property
     def dt(self) -> float:
         return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
+
+
+def take_name(path) -> str:
+    """A take's name: its file name without `.csv` or `.csv.gz`."""
+    name = Path(path).name
+    for suffix in (".gz", ".csv"):
+        name = name.removesuffix(suffix)
+    return name
+
+
+def read_lines(path) -> list[str]:
+    """The text lines of a recording, plain or gzip-compressed (told by the `.gz` suffix);
+    a file that cannot be read is a `FlightDataError` naming it."""
+    path = Path(path)
+    try:
+        if path.suffix == ".gz":
+            with gzip.open(path, "rt", encoding="utf-8-sig") as fh:
+                return fh.read().splitlines()
+        return path.read_text(encoding="utf-8-sig").splitlines()
+    except (OSError, UnicodeDecodeError, EOFError) as e:
+        raise FlightDataError(f"{path}: cannot read the file ({e})") from None
 
 
 def parse_rows(lines: list[str], path: str, first_line: int, width: int | None = None) -> np.ndarray:

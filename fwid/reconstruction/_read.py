@@ -8,7 +8,7 @@ from pathlib import Path
 from .._errors import FlightDataError, InputError
 from ._fwid_raw import read_fwid_raw
 from ._motive import read_motive
-from ._raw import MAX_DROPOUT, RawTake
+from ._raw import MAX_DROPOUT, RawTake, read_lines
 from ._rotations import FRAMES
 
 
@@ -19,7 +19,8 @@ def raw_files(paths) -> list[Path]:
     for p in [paths] if isinstance(paths, (str, os.PathLike)) else paths:
         p = Path(p)
         if p.is_dir():
-            found = sorted(f for f in p.glob("*.csv") if not f.name.endswith(".onboard.csv"))
+            found = sorted(f for f in [*p.glob("*.csv"), *p.glob("*.csv.gz")]
+                           if not f.name.endswith((".onboard.csv", ".onboard.csv.gz")))
             if not found:
                 raise FlightDataError(f"{p}: no raw take (*.csv) in the folder")
             out += found
@@ -52,10 +53,7 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     path = Path(path)
     if not path.is_file():
         raise FlightDataError(f"{path}: no such file")
-    try:
-        lines = path.read_text(encoding="utf-8-sig").splitlines()
-    except (OSError, UnicodeDecodeError) as e:
-        raise FlightDataError(f"{path}: cannot read the take ({e})") from None
+    lines = read_lines(path)
     if not lines:
         raise FlightDataError(f"{path}: empty file")
     if lines[0].startswith("Format Version"):

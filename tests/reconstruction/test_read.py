@@ -116,3 +116,26 @@ def test_bad_take_is_answered_before_jax(tmp_path, motion):
     res = subprocess.run([sys.executable, "-c", probe, "reconstruct", str(path), "--out",
                           str(tmp_path / "out"), "--quiet"], capture_output=True, text=True)
     assert res.returncode == 2 and res.stdout.strip().endswith("False"), res
+
+
+def test_gzip_take_reads_like_the_plain_one(tmp_path):
+    """A take compressed with gzip (`NAME.csv.gz`) is found in a folder and read like the
+    plain file; its name drops both suffixes."""
+    import gzip
+
+    from fwid.reconstruction import raw_files, read_raw
+
+    rng = np.random.default_rng(0)
+    n = 50
+    t = np.arange(n) * 0.01
+    rows = ["t,x,y,z,qw,qx,qy,qz,de,dr,f"]
+    for k in range(n):
+        rows.append(f"{t[k]:.4f},{rng.normal():.6f},0,-1,1,0,0,0,0.01,0,12")
+    text = "\n".join(rows) + "\n"
+    (tmp_path / "plain.csv").write_text(text)
+    with gzip.open(tmp_path / "packed.csv.gz", "wt") as fh:
+        fh.write(text)
+    assert [p.name for p in raw_files(tmp_path)] == ["packed.csv.gz", "plain.csv"]
+    a, b = read_raw(tmp_path / "plain.csv"), read_raw(tmp_path / "packed.csv.gz")
+    assert b.name == "packed" and a.name == "plain"
+    np.testing.assert_array_equal(a.pos, b.pos)
