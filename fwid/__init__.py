@@ -61,7 +61,7 @@ EXPORTS = {
         "load_vehicle",
     ),
     "reconstruction": (
-        "read_raw", "reconstruct", "write_reconstruction",
+        "read_map", "read_raw", "reconstruct", "write_reconstruction",
     ),
     "decomposition": (
         "Decomposition", "check_flapping_frequency", "cycle_averaged", "decompose",

@@ -135,6 +135,12 @@ def parser() -> argparse.ArgumentParser:
                     help="longest tracking gap bridged (s); a longer one is an error")
     rc.add_argument("--min-overlap", type=float, default=2.0, metavar="S",
                     help="shortest overlap of take and autopilot log accepted (s)")
+    rc.add_argument("--map", default=None, metavar="MAP.toml", dest="recording_map",
+                    help="a recording map: where a lab's own CSV files keep the time, the pose, "
+                    "the onboard sensors and the controls, in which units and axes")
+    rc.add_argument("--strict-frame", action="store_true",
+                    help="refuse a take whose onboard sensors contradict the map's frame or "
+                    "angle signs, instead of using the convention they agree with")
     rc.add_argument("--no-figures", dest="figures", action="store_false",
                     help="skip the figure per take")
     rc.add_argument("--quiet", action="store_true", help="no progress lines")

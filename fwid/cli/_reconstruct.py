@@ -19,6 +19,10 @@ def reconstruct(args) -> int:
     from fwid.reconstruction import raw_files
     from fwid.reconstruction._workers import FIGURES, SCIPY, run_all, start
 
+    if args.recording_map is not None:
+        from fwid.reconstruction import read_map
+
+        read_map(args.recording_map)  # a bad map: one line before any work
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
     # worker processes for the per-take work (reading, clocks, writing, figures)
     pool = start(len(raw_files(args.raw)), preload=SCIPY + (FIGURES if args.figures else ()))
@@ -26,7 +30,8 @@ def reconstruct(args) -> int:
         result = fwid.reconstruct(args.raw, body=args.body, frame=args.frame,
                                   onboard=args.onboard, clock_offset=args.clock_offset,
                                   max_dropout=args.max_dropout, min_overlap=args.min_overlap,
-                                  progress=say, pool=pool)
+                                  progress=say, pool=pool, recording_map=args.recording_map,
+                                  strict_frame=args.strict_frame)
         written = fwid.write_reconstruction(result, out, pool=pool) if result.flights else []
         if result.flights and args.figures:
             run_all(figure_file, [((fl, out / f"{fl.name}.reconstruction.png"), {})

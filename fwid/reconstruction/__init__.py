@@ -45,9 +45,10 @@ from ._pipeline import (
     reconstruct as reconstruct,
 )
 from ._raw import OnboardLog as OnboardLog, RawTake as RawTake
+from ._map import RecordingMap as RecordingMap, read_map as read_map
 from ._read import raw_files as raw_files, read_raw as read_raw
 from ._write import write_reconstruction as write_reconstruction
 from ._loads import rigid_body_loads as rigid_body_loads
 
-__all__ = ["OnboardLog", "RawTake", "ReconstructedFlight", "Reconstruction", "raw_files",
-           "read_raw", "reconstruct", "rigid_body_loads", "write_reconstruction"]
+__all__ = ["OnboardLog", "RawTake", "ReconstructedFlight", "Reconstruction", "RecordingMap",
+           "raw_files", "read_map", "read_raw", "reconstruct", "rigid_body_loads", "write_reconstruction"]

@@ -39,7 +39,8 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
     - `path`, `lines`: the take and its text lines;
     - `body`: the rigid body's name (needed when the take holds several);
     - `frame`: the take's world frame (`y-up`, Motive's; `z-up`; `ned`), body axes alike;
-    - `onboard`: the autopilot's log; default `NAME.onboard.csv` beside the take;
+    - `onboard`: the autopilot's log; default `NAME.onboard.csv` beside the take, where
+      a take without one is tracking only (no controls); `False`: read no log;
     - `max_dropout`: the longest gap (s) accepted.
     """
     head = settings(lines[0])
@@ -101,22 +102,30 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
     t, pos, q, tracked = cut
     gaps = dropouts(t, tracked, path, max_dropout)
     name = take_name(path)
-    log = read_onboard(onboard or Path(path).with_name(f"{name}.onboard.csv"), path,
-                       given=onboard is not None)
+    if onboard is False:
+        log = None
+    else:
+        log = read_onboard(onboard or Path(path).with_name(f"{name}.onboard.csv"), path,
+                           given=onboard is not None)
+        if log is None:
+            warnings.append(f"no autopilot log ({name}.onboard.csv) beside the take: the pose "
+                            "alone, no controls")
     return RawTake(name, path, f"Motive CSV export (body {body}, {frame}, {units})", frame, t,
                    pos, q, tracked, None, log, gaps, warnings)
 
 
-def read_onboard(path, take: str, given: bool = False) -> OnboardLog:
-    """The autopilot's log `t,de,dr,f,p,q,r` (+ extras) of a take; a missing log, a missing
-    column or a non-uniform clock is a `FlightDataError` naming the file."""
+def read_onboard(path, take: str, given: bool = False) -> OnboardLog | None:
+    """The autopilot's log `t,de,dr,f,p,q,r` (+ extras) of a take, or None when there is
+    none beside the take (a tracking-only take); a log named with `given` that is not
+    there, a missing column or a non-uniform clock is a `FlightDataError` naming the
+    file."""
     path = Path(path)
     if not path.is_file():
         if given:
-            raise FlightDataError(f"{path}: no such autopilot log (--onboard)")
-        raise FlightDataError(
-            f"{take}: the take has no autopilot log: expected {path.name} beside it (columns "
-            f"{','.join(LOG_COLUMNS)}); add it, or give --onboard LOG.csv")
+            raise FlightDataError(f"{take}: no such autopilot log {path} (--onboard); give the "
+                                  "path of the take's log, or leave --onboard out for the pose "
+                                  "alone")
+        return None
     lines = read_lines(path)
     if not lines:
         raise FlightDataError(f"{path}: empty autopilot log")

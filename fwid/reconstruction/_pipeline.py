@@ -19,11 +19,14 @@ from ..data._sidefiles import VEHICLE_FILE, read_vehicle
 from ._attitude import smooth_attitude
 from ._body_frame import compose, split
 from ._checks import check_frame, residuals
-from ._clock import MIN_OVERLAP, find_offset, resample
+from ._clock import MIN_OVERLAP, ClockOffset, find_offset, resample
+from ._imu import agreement
 from ._loads import body_states, rigid_body_loads
 from ._model import HARMONICS, phase_of
 from ._raw import MAX_DROPOUT, RawTake
+from ._map import RecordingMap, read_map
 from ._read import raw_files, read_raw
+from ._ripple import flapping_frequency
 from ._shrink import coefficient_variance, shrink_harmonics
 from ._smoother import _fns, smooth_batch
 from ._workers import Failed, run_all, start
@@ -194,7 +197,8 @@ def _cut(take: RawTake, clock, min_overlap):
 def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onboard=None,
                 clock_offset: float | None = None, max_dropout: float = MAX_DROPOUT,
                 min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None,
-                processes: int | None = None, pool=None) -> Reconstruction:
+                processes: int | None = None, pool=None, recording_map=None,
+                strict_frame: bool = False) -> Reconstruction:
     """Raw takes to section-1 flights (CONTRACTS section 5), smoothed and with their loads.
 
     The states come from the smoother, the loads from the full nonlinear rigid-body
@@ -202,7 +206,9 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
 
     **Arguments:**
     - `paths`: raw takes (files, or folders of them): fwid raw CSVs or Motive CSV exports;
-    - `body`, `frame`, `onboard`, `max_dropout`: as [`fwid.read_raw`][];
+    - `body`, `frame`, `onboard`, `max_dropout`, `recording_map`, `strict_frame`: as
+      [`fwid.read_raw`][] (a take with neither an autopilot log nor mapped controls is
+      reconstructed from the pose alone, its flapping frequency from the pose's ripple);
     - `clock_offset`: `t_tracking = t_onboard + clock_offset` (s) for Motive takes, instead
       of finding it from the gyro;
     - `min_overlap`: the shortest overlap (s) of take and log accepted;
@@ -217,6 +223,8 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     (`(path, one-line message)`).
     """
     files = raw_files(paths)
+    if recording_map is not None and not isinstance(recording_map, RecordingMap):
+        recording_map = read_map(recording_map)
     if onboard is not None and len(files) > 1:
         raise InputError(f"--onboard names the log of one take, but {len(files)} takes were given")
     own = pool is None
@@ -224,19 +232,27 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     try:
         return _reconstruct(files, pool, body=body, frame=frame, onboard=onboard,
                             clock_offset=clock_offset, max_dropout=max_dropout,
-                            min_overlap=min_overlap, vehicle=vehicle, progress=progress)
+                            min_overlap=min_overlap, vehicle=vehicle, progress=progress,
+                            recording_map=recording_map, strict_frame=strict_frame)
     finally:
         if own and pool is not None:
             pool.shutdown()
 
 
-def _align(take: RawTake, w, sigma, clock_offset, min_overlap):
+def _align(take: RawTake, w, sigma, clock_offset, min_overlap, f):
     """The clock offset of a take with an autopilot log (from the body rates `w` smoothed
-    without the gyro, from attitudes of noise `sigma`), the take's samples the log covers and
-    the log's signals there."""
+    without the gyro, from attitudes of noise `sigma`; `f` the flapping frequency), the
+    take's samples the log covers and the log's signals there. A log without a gyro is
+    taken on the given offset, or as on the tracking's clock."""
     log = take.onboard
+    if not all(c in log.columns for c in "pqr"):
+        given = clock_offset is not None
+        clock = ClockOffset(clock_offset if given else 0.0, 0.0, float("nan"), float("nan"), True)
+        s, cols = _cut(take, clock, min_overlap)
+        return s, cols, clock._replace(given=given)
     gyro = np.stack([log.columns[c] for c in "pqr"], 1)
-    clock = find_offset(take.t, w, log.t, gyro, float(np.median(log.columns["f"])),
+    f0 = float(np.nanmedian(log.columns["f"] if "f" in log.columns else f))
+    clock = find_offset(take.t, w, log.t, gyro, f0,
                         given=clock_offset, min_overlap=min_overlap, sigma=sigma)
     if clock is None:
         at = ("any clock offset" if clock_offset is None
@@ -249,12 +265,25 @@ def _align(take: RawTake, w, sigma, clock_offset, min_overlap):
     return s, cols, clock
 
 
+def _flapping(take: RawTake):
+    """The flapping frequency (Hz) on the take's samples: logged (the controls' `f`, the
+    autopilot log's median), else from the pose's ripple (NaN where there is none), and a
+    note when it was not logged."""
+    if take.controls is not None and "f" in take.controls:
+        return take.controls["f"], None
+    if take.onboard is not None and "f" in take.onboard.columns:
+        return np.full(len(take.t), np.median(take.onboard.columns["f"])), None
+    f, note = flapping_frequency(take.t, take.quat, take.tracked)
+    return (np.full(len(take.t), np.nan) if f is None else f), note
+
+
 def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout, min_overlap,
-                 vehicle, progress) -> Reconstruction:
+                 vehicle, progress, recording_map=None, strict_frame=False) -> Reconstruction:
     say = progress or (lambda msg: None)
     failures, ok = {}, []
     read = run_all(read_raw, [((f,), {"body": body, "frame": frame, "onboard": onboard,
-                                      "max_dropout": max_dropout}) for f in files], pool,
+                                      "max_dropout": max_dropout, "recording_map": recording_map,
+                                      "strict_frame": strict_frame}) for f in files], pool,
                    meanwhile=_fns)  # on workers: JAX imported and the programs made meanwhile
     for f, take in zip(files, read):
         try:
@@ -266,19 +295,28 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             say(f"{f.name}: failed (below)")
     # 1. attitude without the gyro (the final one for a fwid raw CSV); the clock from it
     takes = [t for _, t, _, _ in ok]
-    fs = [t.controls["f"] if t.controls is not None else
-          np.full(len(t.t), np.median(t.onboard.columns["f"])) for t in takes]
+    fs, notes = zip(*(_flapping(t) for t in takes)) if takes else ((), ())
+    takes = [t if n is None else t._replace(warnings=t.warnings + [n])
+             for t, n in zip(takes, notes)]
+    ok = [(f, t, v, p) for (f, _, v, p), t in zip(ok, takes)]
     # one pass where the gyro's pass follows (it starts from this one's attitude), else two
     att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
                      passes=[1 if t.onboard is not None else 2 for t in takes])
     logged = [i for i, t in enumerate(takes) if t.onboard is not None]
-    tasks = [((takes[i], att0[i].w, att0[i].sigma, clock_offset, min_overlap), {})
+    tasks = [((takes[i], att0[i].w, att0[i].sigma, clock_offset, min_overlap, fs[i]), {})
              for i in logged]
     aligned = dict(zip(logged, run_all(_align, tasks, pool)))
     flights, stage = [None] * len(ok), []
     for i, (f, take, veh, vpath) in enumerate(ok):
         if take.onboard is None:
-            stage.append((i, slice(None), dict(take.controls), None, att0[i]))
+            cols = dict(take.controls or {})
+            if "f" not in cols and np.isfinite(fs[i]).any():
+                cols["f"] = fs[i]
+            for k in "pqr":  # columns p q r of a fwid raw CSV are not a gyro; a map's are
+                cols.pop(k, None)
+                if f"{k}_gyro" in cols:
+                    cols[k] = cols.pop(f"{k}_gyro")
+            stage.append((i, slice(None), cols, None, att0[i]))
         elif isinstance(aligned[i], Failed):
             failures[str(f)] = aligned[i].message
             say(f"{f.name}: failed (below)")
@@ -286,26 +324,29 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             s, cols, clock = aligned[i]
             stage.append((i, s, cols, clock, att0[i]))
     # 2. attitude with the gyro, about the first pass's attitude; translation
-    with_gyro = [st for st in stage if st[3] is not None]
+    with_gyro = [st for st in stage if _gyro(st)]
     att1 = _attitude([ok[i][1] for i, *_ in with_gyro],
                      [ok[i][1].quat[s] for i, s, *_ in with_gyro],
                      [ok[i][1].tracked[s] for i, s, *_ in with_gyro],
-                     [c["f"] for _, _, c, _, _ in with_gyro],
+                     [_f(c, len(ok[i][1].t[s])) for i, s, c, _, _ in with_gyro],
                      gyros=[np.stack([c[k] for k in "pqr"], 1) for _, _, c, _, _ in with_gyro],
                      gmasks=[np.ones(len(c["f"]), bool) for _, _, c, _, _ in with_gyro],
                      starts=[a.R[s] for _, s, _, _, a in with_gyro],
                      params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
     gyro_att = {st[0]: a for st, a in zip(with_gyro, att1)}
-    final_att = {i: _shrunk(gyro_att.get(i, a0), c["f"], ok[i][1].dt, ok[i][1].tracked[s])
+    stage_of = {st[0]: st for st in stage}
+    final_att = {i: _shrunk(gyro_att.get(i, a0), _f(c, len(ok[i][1].t[s])), ok[i][1].dt,
+                            ok[i][1].tracked[s])
                  for i, s, c, _, a0 in stage}
     trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
-                         [ok[i][1].tracked[s] for i, s, *_ in stage], [c["f"] for _, _, c, _, _ in stage],
+                         [ok[i][1].tracked[s] for i, s, *_ in stage],
+                         [_f(c, len(ok[i][1].t[s])) for i, s, c, _, _ in stage],
                          [final_att[i] for i, *_ in stage])
     for (i, s, cols, clock, _), tr in zip(stage, trans):
         f, take, veh, vpath = ok[i]
         try:
             att = final_att[i]
-            flights[i] = _assemble(take, s, cols, clock, att, tr, veh, vpath)
+            flights[i] = _assemble(take, s, cols, clock, att, tr, veh, vpath, _gyro(stage_of[i]))
             e = flights[i].entry
             off = f", clock offset {e['clock_offset_s']:.4f} s" if clock is not None else ""
             say(f"{take.name}: {len(flights[i].columns['t'])} samples at {e['rate_hz']:.4g} Hz"
@@ -318,7 +359,17 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     return Reconstruction([fl for fl in flights if fl is not None], fails)
 
 
-def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> ReconstructedFlight:
+def _gyro(stage) -> bool:
+    """Whether a staged take has a gyro (its log's, or one its map names)."""
+    return all(k in stage[2] for k in "pqr")
+
+
+def _f(cols, n):
+    """The flapping frequency of a staged take (NaN: none)."""
+    return cols["f"] if "f" in cols else np.full(n, np.nan)
+
+
+def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath, has_gyro) -> ReconstructedFlight:
     t = take.t[s]
     V, dV, eul = body_states(att.R, tr.vel, tr.acc, att.w)
     XYZ, LMN = rigid_body_loads(V, dV, att.w, att.a, att.R, veh)
@@ -331,7 +382,8 @@ def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> Reconstruct
     for k, v in zip(("phi", "theta", "psi"), eul.T):
         out[k] = v
     for k in ("de", "dr", "f"):
-        out[k] = cols[k]
+        if k in cols:
+            out[k] = cols[k]
     for k, v in zip(("X", "Y", "Z", "L", "M", "N"), np.concatenate([XYZ, LMN], 1).T):
         out[k] = v
     for k, v in zip(("x", "y", "z"), tr.pos.T):
@@ -339,7 +391,7 @@ def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> Reconstruct
     tracked = take.tracked[s]
     out["tracked"] = tracked.astype(float)
     gyro = None
-    if clock is not None:
+    if has_gyro:
         gyro = np.stack([cols[k] for k in "pqr"], 1)
         for k in "pqr":
             out[f"{k}_gyro"] = cols[k]
@@ -368,6 +420,18 @@ def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> Reconstruct
         "residuals": res,
         "specific_force_body_mean": list(np.mean(XYZ, 0) / veh["mass"]),
     }
+    imu = agreement(t, XYZ / veh["mass"], att.w,
+                    {**{k: v for k, v in cols.items() if k.startswith("acc_")},
+                     **({f"{k}_gyro": cols[k] for k in "pqr"} if has_gyro else {})},
+                    float(np.nanmedian(cols["f"])) if "f" in cols else None, att.bias)
+    if imu:
+        conv = take.convention
+        imu["frame"] = (conv.describe() if conv is not None
+                        else f"{take.frame} frame, as read (not checked)")
+        entry["imu"] = imu
+    if clock is not None and not clock.given and not np.isfinite(clock.corr):
+        warnings.append("the autopilot log has no gyro to align its clock by: the two clocks "
+                        "are taken as one; give --clock-offset if they are not")
     if clock is not None and not clock.given and clock.corr < 0.5:
         warnings.append(f"the clock offset is poorly determined (gyro and smoothed rates "
                         f"correlate at {clock.corr:.2f}); check the log, or give --clock-offset")

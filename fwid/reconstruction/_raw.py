@@ -33,7 +33,8 @@ class RawTake(NamedTuple):
     - `t` (s): the tracking system's time base (uniform, step `dt`);
     - `pos` `(n, 3)` (m) and `quat` `(n, 4)` (body -> NED, Hamilton, scalar first, signs
       made continuous), NaN where the body was lost (`tracked` False);
-    - `controls`: `de dr f` and extra columns on `t` (the fwid raw form), else None;
+    - `controls`: `de dr f` and extra columns on `t` (the fwid raw form; a map's take:
+      the controls it maps, `acc_x ..` and `p_gyro ..`), else None;
     - `onboard`: the autopilot's log (the Motive form), else None;
     - `dropouts`: `[start, end]` times of the samples lost, one pair per gap.
     """
@@ -50,6 +51,8 @@ class RawTake(NamedTuple):
     onboard: OnboardLog | None
     dropouts: list[list[float]]
     warnings: list[str]
+    #: the pose convention used, when onboard sensors checked it (`_imu.Convention`)
+    convention: object = None
 
     @property
     def dt(self) -> float:

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from .._errors import FlightDataError, InputError
 from ._fwid_raw import read_fwid_raw
+from ._map import RecordingMap, read_map
+from ._mapped import read_mapped, read_mapped_log
 from ._motive import read_motive
 from ._raw import MAX_DROPOUT, RawTake, read_lines
 from ._rotations import FRAMES
@@ -32,7 +34,8 @@ def raw_files(paths) -> list[Path]:
 
 
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
-             onboard=None, max_dropout: float = MAX_DROPOUT) -> RawTake:
+             onboard=None, max_dropout: float = MAX_DROPOUT, recording_map=None,
+             strict_frame: bool = False) -> RawTake:
     """Read one raw take, either form (CONTRACTS section 5), into north-east-down.
 
     **Arguments:**
@@ -41,7 +44,12 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     - `frame`: `ned`, `y-up` or `z-up`: the recording's world frame, body axes alike
       (default: `ned` for the fwid raw CSV, `y-up` for Motive);
     - `onboard`: the autopilot's log of a Motive take (default `NAME.onboard.csv` beside it);
-    - `max_dropout`: the longest gap in the tracking (s) that is bridged.
+    - `max_dropout`: the longest gap in the tracking (s) that is bridged;
+    - `recording_map`: a recording map (its path, or [`fwid.reconstruction.read_map`][]'s
+      result) for a lab's own columns: the take's pose (or, without `[tracking]`, a Motive
+      export's), its autopilot's controls and sensors;
+    - `strict_frame`: with a map that names onboard sensors, refuse a pose convention they
+      contradict instead of using the one they agree with.
 
     **Returns:** a `fwid.reconstruction.RawTake`. Raises a [`fwid.FlightDataError`][]
     naming the file, the line or time and the fix for every input that cannot be used.
@@ -56,9 +64,25 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     lines = read_lines(path)
     if not lines:
         raise FlightDataError(f"{path}: empty file")
+    m = recording_map
+    if m is not None and not isinstance(m, RecordingMap):
+        m = read_map(m)
     if lines[0].startswith("Format Version"):
-        return read_motive(str(path), lines, body=body, frame=frame or "y-up",
-                           onboard=onboard, max_dropout=max_dropout)
+        take = read_motive(str(path), lines, body=body, frame=frame or "y-up",
+                           onboard=False if m is not None else onboard, max_dropout=max_dropout)
+        if m is None:
+            return take
+        log = read_mapped_log(onboard or m.log_path(path), m, path)
+        notes = [] if log is not None else [f"no autopilot log ({m.log_path(path).name}): "
+                                            "no controls, the pose alone"]
+        return take._replace(onboard=log, warnings=take.warnings + notes)
+    if m is not None and m.position is not None:
+        return read_mapped(str(path), m, frame=frame, strict_frame=strict_frame,
+                           max_dropout=max_dropout, lines=lines)
+    if m is not None:
+        raise FlightDataError(f"{path}: the map {m.path} has no [tracking] section, which only "
+                              "a Motive export (first line 'Format Version') may leave out; "
+                              "map the pose's columns in [tracking]")
     if onboard is not None:
         raise InputError(f"{path}: --onboard is for Motive takes; a fwid raw CSV holds its "
                          "controls itself")

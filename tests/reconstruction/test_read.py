@@ -78,8 +78,9 @@ CASES = {
     "unknown-body": (lambda tp, m: (_motive(tp, m), ["--body", "Bee"]),
                      ["'Bee'", "Wand, DelFly", "--body"]),
     "two-bodies": (lambda tp, m: (_motive(tp, m), []), ["Wand, DelFly", "--body NAME"]),
-    "no-log": (lambda tp, m: (_motive(tp, m, log=False), ["--body", "DelFly"]),
-               ["take.onboard.csv", "--onboard"]),
+    "no-such-log": (lambda tp, m: (_motive(tp, m, log=False),
+                                   ["--body", "DelFly", "--onboard", str(tp / "nope.csv")]),
+                    ["nope.csv", "no such autopilot log"]),
     "non-unit": (_bad_norm, ["line 42", "norm", "qw qx qy qz"]),
     "long-dropout": (lambda tp, m: (_fwid(tp, m, lost=[(100, 150)]), []),
                      ["0.25 s", "t = 0.5", "--max-dropout"]),
@@ -139,3 +140,11 @@ def test_gzip_take_reads_like_the_plain_one(tmp_path):
     a, b = read_raw(tmp_path / "plain.csv"), read_raw(tmp_path / "packed.csv.gz")
     assert b.name == "packed" and a.name == "plain"
     np.testing.assert_array_equal(a.pos, b.pos)
+
+
+def test_motive_take_without_log_is_tracking_only(tmp_path):
+    """A Motive take with no autopilot log beside it is read from the pose alone: no
+    controls, no log, and a warning that says so."""
+    take = read_raw(_motive(tmp_path, Motion(seed=1), log=False), body="DelFly")
+    assert take.onboard is None and take.controls is None
+    assert any("no autopilot log" in w for w in take.warnings), take.warnings

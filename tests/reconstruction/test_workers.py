@@ -52,21 +52,24 @@ def test_no_workers_once_jax_runs_or_for_few_takes():
 def test_command_on_workers_equals_one_process(tmp_path):
     """`fwid reconstruct` as a process (workers forked: 4 takes) writes the same flights and
     `reconstruction.json` as `fwid.reconstruct` in this process (no workers); the take
-    without its log fails alone."""
+    with a cell that is not a number fails alone."""
     motion = Motion(seed=5)
     raw = tmp_path / "raw"
     raw.mkdir()
     for i in range(3):
         write_motive(raw / f"m{i}.csv", motion, T, seed=10 + i, offset=-7.31 + i)
-    write_motive(raw / "nolog.csv", motion, T, seed=20, log=False)
+    bad = write_motive(raw / "bad.csv", motion, T, seed=20)
+    lines = bad.read_text().splitlines()
+    lines[100] = lines[100].replace(",", ",x", 1)  # a cell that is not a number
+    bad.write_text("\n".join(lines) + "\n")
     res = fwid.reconstruct(raw, body="DelFly")
-    assert [Path(p).name for p, _ in res.failures] == ["nolog.csv"]
+    assert [Path(p).name for p, _ in res.failures] == ["bad.csv"]
     fwid.write_reconstruction(res, tmp_path / "here")
     proc = subprocess.run([sys.executable, "-m", "fwid.cli", "reconstruct", str(raw), "--out",
                            str(tmp_path / "there"), "--body", "DelFly"], cwd=ROOT,
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 2, proc.stderr
-    assert "nolog.csv" in proc.stderr and "autopilot log" in proc.stderr
+    assert "bad.csv" in proc.stderr and "not a number" in proc.stderr
     assert "warn" not in proc.stderr.lower(), proc.stderr  # no fork warning from JAX
     for i in range(3):
         here = (tmp_path / "here" / f"m{i}.csv").read_text()

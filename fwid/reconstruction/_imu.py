@@ -1,0 +1,201 @@
+"""The onboard sensors against the pose: which convention the pose was recorded in, and how
+well the reconstruction agrees with the accelerometer and the gyro.
+
+An accelerometer measures the specific force `R^T (a - g)` in body axes, a gyro the body
+rates; both follow from the tracked pose alone. Under a wrong frame (gravity along the wrong
+world axis), a wrong sign of an Euler angle (a logger's pitch positive nose down) or wrong
+sensor axes (forward-left-up read as forward-right-down) the two disagree by about `g`, far
+beyond what noise and flapping leave once both are averaged over the flapping cycle.
+
+**Choosing the convention.** Every candidate (the three frames; the eight sign patterns of
+the Euler angles when the attitude is Euler angles; both sensor axes) is scored by the
+error energy of the cycle-averaged sensor signals against the same signals computed naively
+from the pose under that candidate (a Savitzky-Golay second derivative of the position),
+relative to the sensor signal's own energy, summed over the sensors mapped. The candidates
+within `TIE` of the best score are the ones the data support; of those, the one with the
+fewest changes from the map's is used. So the map's own convention is kept whenever the
+data support it, and replaced only when another fits clearly better; when no candidate
+agrees (correlation of the best below `AGREE` on every axis), the map's is kept and the
+warning says so.
+
+**Agreement.** `reconstruction.json` reports, per flight, for each sensor and body axis the
+correlation `corr` and rms difference `rms` of the cycle-averaged sensor signal and the one
+reconstructed (the specific force `(X, Y, Z) / m`, the body rates less the gyro's bias).
+"""
+
+from __future__ import annotations
+
+from itertools import product
+from typing import NamedTuple
+
+import numpy as np
+
+from .._errors import FlightDataError
+from ._clock import lowpass
+from ._rotations import FRAMES, log_so3, to_ned
+
+#: The cycle average of the comparisons: a low-pass at this cut-off (Hz), or at
+#: `CUTOFF_FRACTION` of the flapping frequency where that is lower.
+CUTOFF = 5.0
+CUTOFF_FRACTION = 0.4
+#: Candidates whose score is within this fraction of the best are supported by the data.
+TIE = 0.25
+#: The best candidate agrees when its correlation reaches this on some axis.
+AGREE = 0.5
+ACC = ("acc_x", "acc_y", "acc_z")
+GYRO = ("p_gyro", "q_gyro", "r_gyro")
+#: Savitzky-Golay window of the naive derivatives (s) and polynomial order.
+SG_WINDOW = 0.3
+SG_ORDER = 3
+
+
+class Convention(NamedTuple):
+    """How a pose and its sensors were recorded: the tracking `frame` (`ned`, `y-up`,
+    `z-up`), a sign per Euler angle (roll, pitch, yaw) and the sensors' body axes."""
+
+    frame: str
+    angle_signs: tuple[float, float, float]
+    sensor_axes: str
+
+    def describe(self) -> str:
+        names = [n for n, s in zip(("roll", "pitch", "yaw"), self.angle_signs) if s < 0]
+        signs = f", {' and '.join(names)} reversed" if names else ""
+        return f"{self.frame} frame{signs}, sensors {self.sensor_axes.upper()}"
+
+
+def cycle_average(t: np.ndarray, x: np.ndarray, f_flap: float | None = None) -> np.ndarray:
+    """`x` low-passed below the flapping cycle (module constants)."""
+    fc = CUTOFF if not f_flap or not np.isfinite(f_flap) else min(CUTOFF, CUTOFF_FRACTION * f_flap)
+    return lowpass(t, x, fc)
+
+
+def _filled(x, ok):
+    idx = np.flatnonzero(ok)
+    n = np.arange(len(x))
+    return np.stack([np.interp(n, idx, c[idx]) for c in np.asarray(x, float).T], 1)
+
+
+def naive_motion(t: np.ndarray, pos: np.ndarray, R: np.ndarray, tracked: np.ndarray, g: float):
+    """The specific force `(n, 3)` (body axes, m/s^2) and body rates `(n, 3)` (rad/s) from a
+    pose in north-east-down, naively: a Savitzky-Golay second derivative of the position
+    (gaps interpolated) and finite differences of the attitude. The peer that any lab would
+    write, and what the frame candidates are judged by."""
+    from scipy.signal import savgol_filter
+
+    dt = float(np.median(np.diff(t)))
+    win = max(SG_ORDER + 2, int(round(SG_WINDOW / dt)) | 1)
+    p = _filled(pos, tracked)
+    a = savgol_filter(p, win, SG_ORDER, deriv=2, delta=dt, axis=0, mode="interp")
+    Rf = np.where(tracked[:, None, None], R, np.eye(3))
+    f = np.einsum("nji,nj->ni", Rf, a - np.array([0.0, 0.0, g]))
+    rel = np.swapaxes(Rf[:-1], -1, -2) @ Rf[1:]
+    w = log_so3(rel) / dt
+    w = np.concatenate([w[:1], 0.5 * (w[1:] + w[:-1]), w[-1:]])
+    both = tracked.copy()
+    both[1:] &= tracked[:-1]
+    return f, w, tracked & both
+
+
+def sensor_arrays(sensors: dict) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The accelerometer `(n, 3)` and gyro `(n, 3)` of mapped sensor columns, or None."""
+    acc = np.stack([sensors[k] for k in ACC], 1) if ACC[0] in sensors else None
+    gyro = np.stack([sensors[k] for k in GYRO], 1) if GYRO[0] in sensors else None
+    return acc, gyro
+
+
+def _compare(t, a, b, ok, f_flap, centre):
+    """Cycle averages of sensor `a` and pose `b` `(n, 3)` where both are good (means removed
+    when `centre`): relative error energy and correlations per axis."""
+    good = ok & np.all(np.isfinite(a), 1)
+    if good.sum() < 20:
+        return None
+    a = cycle_average(t, _filled(a, good), f_flap)[good]
+    b = cycle_average(t, _filled(b, good), f_flap)[good]
+    if centre:
+        a, b = a - a.mean(0), b - b.mean(0)
+    energy = float(np.sum((a - b) ** 2) / max(np.sum(a**2), 1e-12))
+    corr = [float(np.corrcoef(a[:, i], b[:, i])[0, 1]) if np.std(a[:, i]) * np.std(b[:, i]) > 0
+            else 0.0 for i in range(3)]
+    rms = [float(v) for v in np.sqrt(np.mean((a - b) ** 2, 0))]
+    return energy, corr, rms
+
+
+def _score(t, f, w, ok, acc, gyro, f_flap):
+    """Summed relative error energy of the sensors against the pose, and the correlations."""
+    score, corr = 0.0, []
+    for s, mine, centre in ((acc, f, False), (gyro, w, True)):  # a gyro's bias: not the pose's
+        r = None if s is None else _compare(t, s, mine, ok, f_flap, centre)
+        if r is not None:
+            score, corr = score + r[0], corr + r[1]
+    return score, corr
+
+
+def choose_convention(t, pos, R, tracked, sensors, default: Convention, *, attitude=None,
+                      path: str, strict: bool = False, g: float = 9.80665,
+                      f_flap: float | None = None):
+    """The pose convention the onboard sensors support (module docstring).
+
+    **Arguments:** `t`, `pos` `(n, 3)` and body -> world `R` `(n, 3, 3)` as recorded (the
+    map's units applied, not yet turned into north-east-down), `tracked`; `sensors`: the
+    mapped sensors under the map's axes (`acc_x ..`, `p_gyro ..`, forward-right-down);
+    `default`: the map's convention; `attitude`: for Euler angles, the matrices with the
+    angles' signs given (`attitude((1, -1, 1))`), whose sign patterns are then candidates;
+    `strict`: refuse instead of correcting; `f_flap`: the flapping frequency (Hz).
+
+    **Returns:** `(convention, warning or "")`.
+    """
+    acc, gyro = sensor_arrays(sensors)
+    flip = np.array([1.0, -1.0, -1.0])
+    results = {}
+    for signs in (list(product((1.0, -1.0), repeat=3)) if attitude is not None else [(1.0,) * 3]):
+        Rs = R if signs == (1.0, 1.0, 1.0) else attitude(signs)
+        for frame in FRAMES:
+            p_ned, R_ned = to_ned(pos, Rs, frame)
+            f, w, ok = naive_motion(t, p_ned, R_ned, tracked, g)
+            for axes in ("frd", "flu"):
+                k = 1.0 if axes == default.sensor_axes else flip
+                results[Convention(frame, signs, axes)] = _score(
+                    t, f, w, ok, None if acc is None else acc * k,
+                    None if gyro is None else gyro * k, f_flap)
+    best = min(results, key=lambda c: results[c][0])
+    best_score, best_corr = results[best]
+    if not best_corr or max(best_corr) < AGREE:
+        return default, ("the onboard sensors agree with the pose under no convention tried "
+                         f"(best correlation {max(best_corr, default=0):.2f}); the map's "
+                         f"{default.describe()} is used unchecked")
+    supported = [c for c in results if results[c][0] <= (1 + TIE) * best_score]
+
+    def changes(c):
+        return ((c.frame != default.frame) + (c.sensor_axes != default.sensor_axes)
+                + sum(a != b for a, b in zip(c.angle_signs, default.angle_signs)))
+
+    chosen = min(supported, key=lambda c: (changes(c), results[c][0]))
+    if chosen == default:
+        return default, ""
+    which = " and ".join(n for n, s in (("accelerometer", acc), ("gyro", gyro)) if s is not None)
+    fmt = lambda c: ", ".join(f"{v:.2f}" for v in results[c][1][:3])  # noqa: E731
+    msg = (f"the onboard {which} {'disagree' if ' and ' in which else 'disagrees'} with the pose as the map reads it "
+           f"({default.describe()}: cycle-averaged correlation x, y, z {fmt(default)}) and "
+           f"agree with it read as {chosen.describe()} ({fmt(chosen)})")
+    if strict:
+        raise FlightDataError(f"{path}: {msg}; fix the map, or drop --strict-frame to use "
+                              "the convention that agrees")
+    return chosen, msg + "; that reading is used (--strict-frame refuses instead)"
+
+
+def agreement(t, specific_force, rates, sensors, f_flap=None, bias=None) -> dict:
+    """The `imu` block of `reconstruction.json`: for the accelerometer (against the
+    reconstructed specific force `(n, 3)`, m/s^2) and the gyro (less its `bias`, against the
+    smoothed body rates, rad/s), per body axis `corr` and `rms` of the cycle averages."""
+    acc, gyro = sensor_arrays(sensors)
+    ok = np.ones(len(t), bool)
+    out = {}
+    for name, s, mine in (("acc", acc, specific_force), ("gyro", gyro, rates)):
+        if s is None:
+            continue
+        if name == "gyro" and bias is not None:
+            s = s - np.asarray(bias)
+        r = _compare(t, s, mine, ok, f_flap, centre=False)
+        if r is not None:
+            out[name] = {ax: {"corr": c, "rms": e} for ax, c, e in zip("xyz", r[1], r[2])}
+    return out

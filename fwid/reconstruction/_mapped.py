@@ -1,0 +1,187 @@
+"""A lab's own recording read through its recording map (`_map.py`) into a `RawTake`.
+
+The take is a CSV file with one header row. Its time base is made uniform (`_timebase`),
+its pose turned into north-east-down with body axes forward-right-down; the autopilot's
+columns (in the take itself, or in a log of its own on its own clock) give the controls
+through the map's affine maps and the onboard sensors in body axes and SI units. When the
+map names an accelerometer or a gyro in the take's own file, the pose's convention is
+checked against them (`_imu.choose_convention`) before anything is smoothed.
+A Motive export (a map without `[tracking]`) keeps Motive's reader for the pose.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._errors import FlightDataError
+from ._imu import Convention, choose_convention
+from ._map import RecordingMap
+from ._raw import (
+    MAX_DROPOUT, OnboardLog, RawTake, check_quaternions, dropouts, parse_rows, read_lines,
+    take_name, trim_untracked,
+)
+from ._rotations import (
+    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, quat_to_matrix, to_ned,
+)
+from ._timebase import onto_grid, uniform_time
+
+#: Standard gravity (m/s^2): an accelerometer's g.
+G0 = 9.80665
+#: The sensors' axes -> forward-right-down.
+SENSOR_TO_FRD = {"frd": np.ones(3), "flu": np.array([1.0, -1.0, -1.0])}
+
+
+def read_table(path, lines: list[str] | None = None):
+    """A CSV file with one header row: `(columns, warnings)`, `columns` a dict of arrays
+    (empty cells NaN). A last line cut short (a log stopped mid-write) is dropped with a
+    warning."""
+    lines = read_lines(path) if lines is None else lines
+    if not lines:
+        raise FlightDataError(f"{path}: empty file")
+    header = [h.strip() for h in lines[0].rstrip("\r\n").split(",")]
+    body = [ln for ln in lines[1:] if ln.strip()]
+    notes = []
+    if body and len(body[-1].split(",")) < len(header):
+        body = body[:-1]
+        notes.append("the last line is cut short; dropped")
+    data = parse_rows(body, str(path), 2, width=len(header))
+    return {h: data[:, i] for i, h in enumerate(header) if h}, notes
+
+
+def _pick(cols: dict, names, path, m: RecordingMap) -> np.ndarray:
+    missing = [c for c in names if c not in cols]
+    if missing:
+        have = ", ".join(list(cols)[:12]) + (", ..." if len(cols) > 12 else "")
+        raise FlightDataError(f"{path}: no column {', '.join(repr(c) for c in missing)}, which "
+                              f"the map {m.path} names (the file has {have}); fix the map")
+    return np.stack([cols[c] for c in names], -1)
+
+
+def _time(cols, path, m: RecordingMap, column, scale):
+    """The time stamps (s) of a table, from a time column or frame numbers at a rate."""
+    if column is None and m.frame_column is not None:
+        return _pick(cols, [m.frame_column], path, m)[:, 0] / m.frame_rate
+    return _pick(cols, [column], path, m)[:, 0] * scale
+
+
+def mapped_controls(cols, path, m: RecordingMap, g: float = G0) -> dict[str, np.ndarray]:
+    """The section-1 controls the map gives (`de dr f`, affine maps of column means) and
+    the onboard sensors in body axes (forward-right-down) and SI units: `acc_x acc_y acc_z`
+    (m/s^2, specific force) and `p_gyro q_gyro r_gyro` (rad/s)."""
+    out = {}
+    for k, ctl in m.inputs.items():
+        out[k] = ctl.scale * (np.mean(_pick(cols, ctl.columns, path, m), -1) - ctl.offset)
+    axes = SENSOR_TO_FRD[m.axes]
+    if m.acc is not None:
+        a = _pick(cols, m.acc, path, m) * (g if m.acc_scale is None else m.acc_scale) * axes
+        out.update(zip(("acc_x", "acc_y", "acc_z"), a.T))
+    if m.gyro is not None:
+        w = _pick(cols, m.gyro, path, m) * m.gyro_scale * axes
+        out.update(zip(("p_gyro", "q_gyro", "r_gyro"), w.T))
+    return out
+
+
+def _attitude_matrices(att, m: RecordingMap, path):
+    """Body -> world matrices of the recorded attitude columns (NaN rows stay NaN-free: the
+    identity, masked by `tracked`), and the rows that hold a usable attitude."""
+    ok = np.all(np.isfinite(att), 1)
+    if m.euler is not None:
+        R = euler_to_matrix_ordered(np.where(ok[:, None], att * m.angle_scale, 0.0), m.euler)
+        return R, ok
+    q = att if m.quaternion == "wxyz" else att[:, [3, 0, 1, 2]]
+    return quat_to_matrix(np.where(ok[:, None], q, [1.0, 0, 0, 0])
+                          / np.linalg.norm(np.where(ok[:, None], q, [1.0, 0, 0, 0]), axis=1,
+                                           keepdims=True)), ok
+
+
+def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
+                strict_frame: bool = False, max_dropout: float = MAX_DROPOUT,
+                lines: list[str] | None = None) -> RawTake:
+    """Read a lab's CSV take through the recording map `m` into a `RawTake` in
+    north-east-down (module docstring).
+
+    **Arguments:**
+    - `path`: the take (a CSV file with one header row, or `.csv.gz`);
+    - `m`: the recording map ([`fwid.reconstruction.read_map`][]);
+    - `frame`: overrides the map's `[tracking] frame`;
+    - `strict_frame`: refuse, instead of correcting, a pose convention the onboard sensors
+      contradict;
+    - `max_dropout`: the longest gap (s) bridged.
+    """
+    cols, notes = read_table(path, lines)
+    t = _time(cols, path, m, m.time_column, m.time_scale)
+    grid, how, more = uniform_time(t, path, 2, m.time_column or m.frame_column)
+    notes += more
+    pos = _pick(cols, m.position, path, m) * m.position_scale
+    att = _pick(cols, m.attitude, path, m)
+    if m.quaternion is not None:
+        ok = np.all(np.isfinite(att), 1)
+        q = att if m.quaternion == "wxyz" else att[:, [3, 0, 1, 2]]
+        check_quaternions(q, ok, t, path, 2)
+    R, ok_att = _attitude_matrices(att, m, path)
+    tracked = ok_att & np.all(np.isfinite(pos), 1)
+    sensors = mapped_controls(cols, path, m) if m.log_is_take else {}
+    convention = Convention(frame or m.frame, (1.0, 1.0, 1.0), m.axes)
+    if m.log_is_take and ("acc_x" in sensors or "p_gyro" in sensors):
+        attitude = None
+        if m.euler is not None:
+            attitude = lambda signs: _attitude_matrices(att * np.array(signs), m, path)[0]  # noqa: E731
+        f_flap = float(np.nanmedian(sensors["f"])) if "f" in sensors else None
+        convention, note = choose_convention(t, pos, R, tracked, sensors, convention,
+                                             attitude=attitude, path=path, strict=strict_frame,
+                                             f_flap=f_flap)
+        if note:
+            notes.append(note)
+        if convention.sensor_axes != m.axes:
+            sensors = mapped_controls(cols, path, m._replace(axes=convention.sensor_axes))
+        if convention.angle_signs != (1.0, 1.0, 1.0):
+            R, _ = _attitude_matrices(att * np.array(convention.angle_signs), m, path)
+    pos, R = to_ned(pos, R, convention.frame)
+    q = np.where(tracked[:, None], matrix_to_quat(R), np.nan)
+    # onto the uniform grid: positions and sign-continuous quaternions, linear (renormalised)
+    q = continuous_sign(q, tracked)
+    pos, q = onto_grid(np.where(tracked[:, None], pos, np.nan), how), onto_grid(q, how)
+    sensors = {k: onto_grid(v, how) for k, v in sensors.items()}
+    tracked = np.all(np.isfinite(pos), 1) & np.all(np.isfinite(q), 1)
+    q = np.where(tracked[:, None], q / np.linalg.norm(np.where(tracked[:, None], q, 1.0), axis=1,
+                                                      keepdims=True), np.nan)
+    t = grid
+    # the controls' own gaps (a log's empty cells) end the take where they start or stop it
+    if sensors:
+        have = np.all(np.isfinite(np.stack(list(sensors.values()), 1)), 1)
+        tracked = tracked & have if not np.all(have) else tracked
+    cut = trim_untracked(t, pos, q, tracked, sensors or None)
+    if cut is None:
+        raise FlightDataError(f"{path}: the pose is complete on fewer than 3 rows")
+    t, pos, q, tracked, sensors = cut
+    if sensors:
+        for k, v in sensors.items():
+            good = np.isfinite(v)
+            if not good.all():
+                sensors[k] = np.interp(t, t[good], v[good])
+    gaps = dropouts(t, tracked, path, max_dropout)
+    log = None
+    if not m.log_is_take:
+        log = read_mapped_log(m.log_path(path), m, path)
+    source = (f"recording map {m.path} ({convention.frame}"
+              + (f", Euler {m.euler}" if m.euler else "") + ")")
+    checked = m.log_is_take and ("acc_x" in sensors or "p_gyro" in sensors)
+    return RawTake(take_name(path), str(path), source, convention.frame, t, pos, q, tracked,
+                   sensors if m.log_is_take else None, log, gaps, notes,
+                   convention if checked else None)
+
+
+def read_mapped_log(path, m: RecordingMap, take) -> OnboardLog | None:
+    """The autopilot's log of its own (on its own clock) through the map: its time column
+    and the mapped controls and sensors; None (no controls) when there is no such file."""
+    from pathlib import Path
+
+    if not Path(path).is_file():
+        return None
+    cols, _ = read_table(path)
+    t = _pick(cols, [m.log_time], path, m)[:, 0] * m.log_time_scale
+    grid, how, _ = uniform_time(t, str(path), 2, m.log_time)
+    out = {k: onto_grid(v, how) for k, v in mapped_controls(cols, path, m).items()}
+    if "p_gyro" in out:
+        out.update({k: out.pop(f"{k}_gyro") for k in "pqr"})
+    return OnboardLog(str(path), grid, out)

@@ -1,0 +1,116 @@
+"""The flapping frequency from the pose's own flapping ripple, for takes where nothing logged
+it (a tracking-only take).
+
+Flapping rocks the body at the flapping frequency: the body rates (finite differences of the
+tracked attitude) carry a line there and at its harmonics. The take's spectrum (Welch, summed
+per axis) gives the fundamental within the band `BAND` (Hz, up to 0.45 times the sample
+rate) whose harmonics stand out most together (`_harmonic_score`); it counts when one of
+them stands out of the spectrum's noise by `PROMINENCE` of its standard deviations. A take
+that shows one line only is read at that line (a body that rocks at twice the flapping
+frequency then reads twice it: map `f` where the log has it). Short-time spectra (`WINDOW` s, a quarter overlapping) then follow it through the take
+within `TRACK` of it, each peak refined by a parabola through its three bins, and the result is
+interpolated onto the samples.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._rotations import log_so3, quat_to_matrix
+
+#: The band searched for the flapping line (Hz).
+BAND = (4.0, 40.0)
+#: How far a line must stand above the band's median spectral level, in standard deviations
+#: of a Welch spectrum's noise bins (`1 / sqrt(K)` of the level for `K` segments averaged).
+PROMINENCE = 8.0
+#: Short-time window (s) and the fraction of the line's frequency it may wander.
+WINDOW = 2.0
+TRACK = 0.3
+
+
+def _rates(t, quat, tracked):
+    q = np.where(tracked[:, None], quat, [1.0, 0, 0, 0])
+    R = quat_to_matrix(q / np.linalg.norm(q, axis=1, keepdims=True))
+    dt = float(np.median(np.diff(t)))
+    w = log_so3(np.swapaxes(R[:-1], -1, -2) @ R[1:]) / dt
+    ok = tracked[:-1] & tracked[1:]
+    w = np.where(ok[:, None], w, 0.0)
+    return w - np.mean(w[ok], 0) if ok.any() else w, dt
+
+
+def _harmonic_score(freq, power, lo, hi, top, floor):
+    """The fundamental in `[lo, hi]` whose harmonics 1-3 (those below `top` Hz) stand out
+    most: for each candidate bin the log prominence (power over the band's median) at each
+    harmonic where it reaches `floor` (below it, noise: nothing), summed over harmonics and axes; a body that rocks mostly at twice
+    the flapping frequency (two wings beating in opposition) is still read at the flapping
+    frequency. Returns the fundamental (refined by a parabola through its bins' scores) and
+    the largest prominence among its harmonics."""
+    band = (freq >= lo) & (freq <= top)
+    level = np.median(power[band], 0)
+    prom = power / np.where(level > 0, level, np.inf)
+    lp = np.log(np.maximum(prom, 1.0)) * (prom >= floor)
+    df = freq[1] - freq[0]
+    cand = np.flatnonzero((freq >= lo) & (freq <= hi))
+    if cand.size < 3:
+        return np.nan, 0.0
+    score = np.zeros(cand.size)
+    best_prom = np.zeros(cand.size)
+    for k in range(1, 4):
+        idx = np.rint(k * freq[cand] / df).astype(int)
+        inside = k * freq[cand] <= top
+        idx = np.clip(idx, 1, len(freq) - 2)
+        near = np.maximum(np.maximum(lp[idx - 1], lp[idx]), lp[idx + 1])  # (cand, axes)
+        score += np.where(inside, near.sum(-1), 0.0)
+        pk = np.maximum(np.maximum(prom[idx - 1], prom[idx]), prom[idx + 1]).max(-1)
+        best_prom = np.maximum(best_prom, np.where(inside, pk, 0.0))
+    j = int(np.flatnonzero(score >= score.max() - 1e-9)[-1])  # a tie: the line itself
+    f = float(freq[cand[j]])
+    if 0 < j < cand.size - 1:
+        a, b, c = score[j - 1:j + 2]
+        den = a - 2 * b + c
+        if den < 0:
+            f += float(np.clip(0.5 * (a - c) / den, -0.5, 0.5)) * df
+    return f, float(best_prom[j])
+
+
+def _threshold(n: int, nper: int) -> float:
+    """The prominence a line needs in a Welch spectrum of `n` samples in segments of `nper`
+    (half overlapping): `PROMINENCE` noise standard deviations above the level."""
+    segments = max(1, 2 * n // nper - 1)
+    return 1.0 + PROMINENCE / np.sqrt(segments)
+
+
+def flapping_frequency(t: np.ndarray, quat: np.ndarray, tracked: np.ndarray):
+    """The flapping frequency (Hz) at each sample of a take from its attitude ripple, or
+    None when the take shows no flapping line (module docstring).
+
+    **Returns:** `(f, note)`: `f` `(n,)` or None, and a one-line note for the take's
+    warnings."""
+    from scipy.signal import welch
+
+    w, dt = _rates(t, quat, tracked)
+    fs = 1.0 / dt
+    hi = min(BAND[1], 0.45 * fs)
+    nper = min(len(w), int(round(WINDOW * fs)))
+    if nper < 16 or hi <= BAND[0]:
+        return None, "no flapping frequency: the take is too short or too slowly sampled to see it"
+    freq, p = welch(w, fs=fs, nperseg=nper, axis=0)
+    need = _threshold(len(w), nper)
+    f0, prom = _harmonic_score(freq, p, BAND[0], hi, 0.45 * fs, need)
+    if not np.isfinite(f0) or prom < need:
+        return None, ("no flapping line in the pose's body rates (none between "
+                      f"{BAND[0]:g} and {hi:.3g} Hz stands out); the flights have no f column "
+                      "and no flapping harmonics are separated: map f from the log if it has it")
+    hop = max(1, nper // 4)
+    centres, track = [], []
+    for s in range(0, len(w) - nper + 1, hop):
+        fr, ps = welch(w[s:s + nper], fs=fs, nperseg=nper, axis=0)
+        fk, pk = _harmonic_score(fr, ps, f0 * (1 - TRACK), f0 * (1 + TRACK), 0.45 * fs,
+                                 _threshold(nper, nper))
+        if np.isfinite(fk) and pk >= _threshold(nper, nper):
+            centres.append(t[s] + 0.5 * nper * dt)
+            track.append(fk)
+    f = (np.full(len(t), f0) if len(track) < 2
+         else np.interp(t, np.array(centres), np.array(track)))
+    return f, (f"flapping frequency from the pose's ripple: {np.median(f):.3g} Hz "
+               f"(from {f.min():.3g} to {f.max():.3g}); no log gave f")
