@@ -174,9 +174,10 @@ def choose_convention(t, pos, R, tracked, sensors, default: Convention, *, attit
         return default, ""
     which = " and ".join(n for n, s in (("accelerometer", acc), ("gyro", gyro)) if s is not None)
     fmt = lambda c: ", ".join(f"{v:.2f}" for v in results[c][1][:3])  # noqa: E731
-    msg = (f"the onboard {which} {'disagree' if ' and ' in which else 'disagrees'} with the pose as the map reads it "
+    verb = "" if " and " in which else "s"
+    msg = (f"the onboard {which} disagree{verb} with the pose as the map reads it "
            f"({default.describe()}: cycle-averaged correlation x, y, z {fmt(default)}) and "
-           f"agree with it read as {chosen.describe()} ({fmt(chosen)})")
+           f"agree{verb} with it read as {chosen.describe()} ({fmt(chosen)})")
     if strict:
         raise FlightDataError(f"{path}: {msg}; fix the map, or drop --strict-frame to use "
                               "the convention that agrees")
