@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .._errors import FlightDataError, InputError
 from ._fwid_raw import read_fwid_raw
-from ._motive import read_motive
+from ._motive import is_old_export, old_export_error, read_motive
 from ._raw import MAX_DROPOUT, RawTake, read_lines
 from ._rotations import FRAMES
 
@@ -33,7 +33,7 @@ def raw_files(paths) -> list[Path]:
 
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
              onboard=None, max_dropout: float = MAX_DROPOUT) -> RawTake:
-    """Read one raw take, either form (CONTRACTS section 5), into north-east-down.
+    """Read one raw take, either form (the guide's page on recordings), into north-east-down.
 
     **Arguments:**
     - `path`: a fwid raw CSV or a Motive CSV export (its first line starts `Format Version`);
@@ -59,6 +59,8 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     if lines[0].startswith("Format Version"):
         return read_motive(str(path), lines, body=body, frame=frame or "y-up",
                            onboard=onboard, max_dropout=max_dropout)
+    if is_old_export(lines):
+        raise old_export_error(str(path), lines)
     if onboard is not None:
         raise InputError(f"{path}: --onboard is for Motive takes; a fwid raw CSV holds its "
                          "controls itself")
