@@ -39,8 +39,11 @@ def frame_times(frames: np.ndarray, time: np.ndarray, rate: float, path: str, fi
     bad = np.flatnonzero(~np.isfinite(frames) | (np.abs(frames - np.round(frames)) > 1e-6))
     if bad.size:
         i = int(bad[0])
+        if not np.isfinite(frames[i]):
+            raise FlightDataError(f"{path}, line {first_line + i}: the Frame cell is empty; "
+                                  "every row needs its frame number")
         raise FlightDataError(f"{path}, line {first_line + i}: the frame number "
-                              f"{frames[i]!r} is not a whole number; re-export the take")
+                              f"{frames[i]:g} is not a whole number; re-export the take")
     frames = np.round(frames).astype(np.int64)
     step = np.diff(frames)
     if np.any(step <= 0):
