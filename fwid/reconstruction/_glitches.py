@@ -154,11 +154,12 @@ def drop_glitches(t: np.ndarray, quat: np.ndarray, tracked: np.ndarray,
     rejected = np.array(rejected)
     flips, jumps = rejected[by_angle], rejected[~by_angle]
     if rejected.size > max_fraction * idx.size:
+        held_too = (f"; {int(same.sum())} more frames only repeat the previous pose"
+                    if same.any() else "")
         raise FlightDataError(
             f"{path}: {rejected.size} of {idx.size} tracked frames are glitches "
             f"({flips.size} orientation flips, {jumps.size} position jumps, at t = "
-            f"{_times(t, rejected)}; {int(same.sum())} more frames only repeat the previous "
-            f"pose), more than {max_fraction:.0%}: the rigid body's markers are "
+            f"{_times(t, rejected)}{held_too}), more than {max_fraction:.0%}: the rigid body's markers are "
             "confused; re-create the rigid body in the tracking software (markers placed "
             "asymmetrically), or cut the take to where it is tracked well")
     tracked[rejected] = False
