@@ -69,7 +69,8 @@ def frame_times(frames: np.ndarray, time: np.ndarray, rate: float, path: str, fi
                 "the take at the gap (export the stretches on either side as takes of their own)")
     if missing.size:
         warnings.append(f"{missing.size} frames missing from the export (first frame "
-                        f"{frames[0] + missing[0]}, t = {t[missing[0]]:.6g} s): bridged as dropouts")
+                        f"{frames[0] + missing[0]}, t = {t[missing[0]]:.6g} s): bridged as "
+                        "dropouts")
     off = np.abs(time - t[rows])
     off = np.where(np.isfinite(off), off, 0.0)
     if off.max() > 1e-3 + 1e-6:

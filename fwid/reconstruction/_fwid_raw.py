@@ -1,5 +1,6 @@
-"""The fwid raw CSV (the guide's page on recordings): `t,x,y,z,qw,qx,qy,qz,de,dr,f` (+ extra columns,
-kept), empty pose cells where the tracking lost the body, one file holding both sources."""
+"""The fwid raw CSV (the guide's page on recordings): `t,x,y,z,qw,qx,qy,qz,de,dr,f` (+ extra
+columns, kept), empty pose cells where the tracking lost the body, one file holding both
+sources; glitches dropped (`_glitches`)."""
 
 from __future__ import annotations
 

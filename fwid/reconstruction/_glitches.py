@@ -159,9 +159,9 @@ def drop_glitches(t: np.ndarray, quat: np.ndarray, tracked: np.ndarray,
         raise FlightDataError(
             f"{path}: {rejected.size} of {idx.size} tracked frames are glitches "
             f"({flips.size} orientation flips, {jumps.size} position jumps, at t = "
-            f"{_times(t, rejected)}{held_too}), more than {max_fraction:.0%}: the rigid body's markers are "
-            "confused; re-create the rigid body in the tracking software (markers placed "
-            "asymmetrically), or cut the take to where it is tracked well")
+            f"{_times(t, rejected)}{held_too}), more than {max_fraction:.0%}: the rigid "
+            "body's markers are confused; re-create the rigid body in the tracking software "
+            "(markers placed asymmetrically), or cut the take to where it is tracked well")
     tracked[rejected] = False
     if flips.size:
         warnings.append(f"{flips.size} orientation glitches (flips) dropped, at t = "
