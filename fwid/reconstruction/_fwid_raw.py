@@ -1,11 +1,13 @@
-"""The fwid raw CSV (CONTRACTS section 5a): `t,x,y,z,qw,qx,qy,qz,de,dr,f` (+ extra columns,
-kept), empty pose cells where the tracking lost the body, one file holding both sources."""
+"""The fwid raw CSV (the guide's page on recordings): `t,x,y,z,qw,qx,qy,qz,de,dr,f` (+ extra
+columns, kept), empty pose cells where the tracking lost the body, one file holding both
+sources; glitches dropped (`_glitches`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .._errors import FlightDataError
+from ._glitches import drop_glitches
 from ._raw import (
     MAX_DROPOUT, RawTake, check_quaternions, check_time, dropouts, parse_rows, take_name,
     trim_untracked,
@@ -35,7 +37,7 @@ def read_fwid_raw(path: str, lines: list[str], frame: str = "ned",
                 f"{path}: attitude given as Euler angles ({', '.join(euler)}); fwid needs the "
                 "attitude quaternion: export columns qw qx qy qz (body -> Earth, scalar first)")
         raise FlightDataError(f"{path}: missing column(s) {', '.join(missing)}; a fwid raw CSV "
-                              "has t,x,y,z,qw,qx,qy,qz,de,dr,f (CONTRACTS section 5a)")
+                              "has t,x,y,z,qw,qx,qy,qz,de,dr,f (the guide's page on recordings)")
     data = parse_rows(lines[1:], path, 2, width=len(header))
     col = {h: data[:, i] for i, h in enumerate(header) if h}
     t = col["t"]
@@ -57,15 +59,16 @@ def read_fwid_raw(path: str, lines: list[str], frame: str = "ned",
         pos, R = to_ned(pos, R, frame)
         q = np.where(tracked[:, None], matrix_to_quat(R), np.nan)
     q = continuous_sign(q, tracked)
+    kept, warnings = drop_glitches(t, q, tracked, pos, path)
     extras = {h: v for h, v in col.items() if h not in ("t", *POSE)}
-    cut = trim_untracked(t, pos, q, tracked, extras)
+    cut = trim_untracked(t, pos, q, kept, extras, {"dropped": tracked & ~kept})
     if cut is None:
         raise FlightDataError(f"{path}: the body is tracked on fewer than 3 rows")
-    t, pos, q, tracked, extras = cut
-    gaps = dropouts(t, tracked, path, max_dropout)
+    t, pos, q, tracked, extras, dropped = cut
+    gaps = dropouts(t, tracked, path, max_dropout, dropped["dropped"])
     stem = name or take_name(path)
     return RawTake(stem, path, f"fwid raw CSV ({frame})", frame, t, pos, q, tracked, extras,
-                   None, gaps, [])
+                   None, gaps, warnings)
 
 
 

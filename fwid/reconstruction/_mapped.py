@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import FlightDataError
+from ._glitches import drop_glitches
 from ._imu import Convention, choose_convention
 from ._map import RecordingMap
 from ._raw import (
@@ -119,7 +120,11 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
         q = att if m.quaternion == "wxyz" else att[:, [3, 0, 1, 2]]
         check_quaternions(q, ok, t, path, 2)
     R, ok_att = _attitude_matrices(att, m, path)
-    tracked = ok_att & np.all(np.isfinite(pos), 1)
+    seen = ok_att & np.all(np.isfinite(pos), 1)
+    # glitches (held poses, flips, jumps) are the same in any frame: dropped before the check
+    tracked, said = drop_glitches(t, np.where(seen[:, None], matrix_to_quat(R), np.nan), seen,
+                                  np.where(seen[:, None], pos, np.nan), path)
+    notes += said
     sensors = mapped_controls(cols, path, m) if m.log_is_take else {}
     convention = Convention(frame or m.frame, (1.0, 1.0, 1.0), m.axes)
     if m.log_is_take and ("acc_x" in sensors or "p_gyro" in sensors):
@@ -140,26 +145,30 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     q = np.where(tracked[:, None], matrix_to_quat(R), np.nan)
     # onto the uniform grid: positions and sign-continuous quaternions, linear (renormalised)
     q = continuous_sign(q, tracked)
+    seen = np.all(np.isfinite(onto_grid(np.where(seen[:, None], pos, np.nan), how)), 1)
     pos, q = onto_grid(np.where(tracked[:, None], pos, np.nan), how), onto_grid(q, how)
     sensors = {k: onto_grid(v, how) for k, v in sensors.items()}
     tracked = np.all(np.isfinite(pos), 1) & np.all(np.isfinite(q), 1)
     q = np.where(tracked[:, None], q / np.linalg.norm(np.where(tracked[:, None], q, 1.0), axis=1,
                                                       keepdims=True), np.nan)
     t = grid
+    if "f" in sensors:  # motors stopped (on the ground): the flight is where the wings beat
+        tracked, note = _flapping_span(t, tracked, sensors["f"])
+        notes += [note] if note else []
     # the controls' own gaps (a log's empty cells) end the take where they start or stop it
     if sensors:
         have = np.all(np.isfinite(np.stack(list(sensors.values()), 1)), 1)
         tracked = tracked & have if not np.all(have) else tracked
-    cut = trim_untracked(t, pos, q, tracked, sensors or None)
+    cut = trim_untracked(t, pos, q, tracked, sensors, {"dropped": seen & ~tracked})
     if cut is None:
         raise FlightDataError(f"{path}: the pose is complete on fewer than 3 rows")
-    t, pos, q, tracked, sensors = cut
+    t, pos, q, tracked, sensors, extra = cut
     if sensors:
         for k, v in sensors.items():
             good = np.isfinite(v)
             if not good.all():
                 sensors[k] = np.interp(t, t[good], v[good])
-    gaps = dropouts(t, tracked, path, max_dropout)
+    gaps = dropouts(t, tracked, path, max_dropout, extra["dropped"])
     log = None
     if not m.log_is_take:
         log = read_mapped_log(m.log_path(path), m, path)
@@ -169,6 +178,25 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     return RawTake(take_name(path), str(path), source, convention.frame, t, pos, q, tracked,
                    sensors if m.log_is_take else None, log, gaps, notes,
                    convention if checked else None)
+
+
+def _flapping_span(t, tracked, f):
+    """`tracked` cut to the longest stretch where the mapped flapping frequency `f` is
+    positive (a flight file's `f` must be), and a note of what was cut."""
+    pos = np.isfinite(f) & (f > 0)
+    if pos.all():
+        return tracked, ""
+    edges = np.diff(np.concatenate([[0], pos.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if starts.size == 0:
+        raise FlightDataError("the mapped flapping frequency f is nowhere positive; check "
+                              "[inputs] f (its offset and scale) in the map")
+    k = int(np.argmax(ends - starts))
+    keep = np.zeros(len(t), bool)
+    keep[starts[k]:ends[k]] = True
+    return tracked & keep, (f"the mapped flapping frequency is not positive (the wings at "
+                            f"rest) outside t = {t[starts[k]]:.6g} to {t[ends[k] - 1]:.6g} s; "
+                            "the flight is cut to that stretch")
 
 
 def read_mapped_log(path, m: RecordingMap, take) -> OnboardLog | None:

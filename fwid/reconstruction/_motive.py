@@ -1,9 +1,19 @@
-"""The OptiTrack Motive CSV export (CONTRACTS section 5b) and the autopilot's log beside it.
+"""The OptiTrack Motive CSV export (the guide's page on recordings) and the autopilot's log
+beside it.
 
-Line 1 holds the take's settings as key/value pairs (`Capture Frame Rate`, `Rotation Type`,
-`Length Units`, ...), line 2 is empty, lines 3-7 name each data column (type, name, ID,
-Rotation/Position, component), data rows follow. The rigid body is picked by name; its
-`Rotation` X Y Z W and `Position` X Y Z columns are read, empty cells are dropouts.
+Line 1 holds the take's settings as key/value pairs (`Format Version`, `Capture Frame Rate`,
+`Export Frame Rate`, `Rotation Type`, `Length Units`, ...), line 2 is empty, lines 3-7 name each
+data column (type, name, ID, Rotation/Position, component), data rows follow: `Frame`,
+`Time (Seconds)`, then the columns. The rigid body is picked by name; its `Rotation` (X Y Z W
+quaternion, or X Y Z Euler angles in degrees in the header's rotation order) and `Position`
+X Y Z columns are read, empty cells are dropouts. The time base comes from the frame numbers
+(`_frames`), the length unit from the header or the numbers (`_units`); glitches are dropped
+(`_glitches`).
+
+Motive's Euler angles (Motive 1.6 on; NaturalPoint's knowledge-base article "Changes in
+Motive's reported Euler angles"): right-handed, in degrees, X, Y and Z the angles about the
+rigid body's X, Y and Z axes, applied as relative (intrinsic) rotations in the order the
+header names: order `XYZ` is `Rx(X) Ry(Y) Rz(Z)`.
 """
 
 from __future__ import annotations
@@ -13,21 +23,82 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import FlightDataError
+from ._frames import frame_times
+from ._glitches import drop_glitches
 from ._raw import (
     MAX_DROPOUT, OnboardLog, RawTake, check_quaternions, check_time, dropouts, parse_rows,
     read_lines, take_name, trim_untracked,
 )
-from ._rotations import continuous_sign, matrix_to_quat, quat_to_matrix, to_ned
+from ._rotations import (
+    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, quat_to_matrix, to_ned,
+)
+from ._units import length_unit
 
-UNITS = {"millimeters": 1e-3, "centimeters": 1e-2, "meters": 1.0}
 LOG_COLUMNS = ("t", "de", "dr", "f", "p", "q", "r")
+#: The rotation orders of Motive's Euler exports.
+EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
+#: The oldest `Format Version` of the layout read here (Motive 1.7 on: 1.2, 1.21, 1.22, 1.23).
+FORMAT_VERSION = 1.2
 _FIRST_DATA_LINE = 8
+_REEXPORT = ("re-export the take from Motive 1.7 or later (2.x, 3.x) as CSV with the default "
+             "layout (header information on)")
 
 
 def settings(line: str) -> dict[str, str]:
     """The key/value pairs of a Motive export's first line."""
     cells = [c.strip() for c in line.rstrip("\r\n").split(",")]
     return {cells[i]: cells[i + 1] for i in range(0, len(cells) - 1, 2)}
+
+
+def is_old_export(lines: list[str]) -> bool:
+    """Whether `lines` are an OptiTrack export in the old 1.1-era layout (Arena, Tracking
+    Tools, Motive up to 1.5): `comment,...`, `info,version,...` and `frame,...` lines."""
+    head = [ln.split(",", 1)[0].strip().lower() for ln in lines[:12]]
+    return head[:1] in (["comment"], ["info"]) and "info" in head
+
+
+def old_export_error(path: str, lines: list[str]) -> FlightDataError:
+    """The one-line refusal of an export in the old layout."""
+    version = next((ln.split(",")[2].strip() for ln in lines[:12]
+                    if ln.lower().startswith("info,version,") and ln.count(",") >= 2), "1.1")
+    return FlightDataError(f"{path}: an OptiTrack CSV export in the old layout (format version "
+                           f"{version}: 'info' and 'frame' lines), which fwid does not read; "
+                           f"{_REEXPORT}")
+
+
+def _check_layout(path: str, lines: list[str], head: dict[str, str]) -> None:
+    """The export is in the layout read here: format version 1.2 or later and the five lines
+    that name each column."""
+    version = _number(head.get("Format Version"))
+    if version is not None and version < FORMAT_VERSION - 1e-9:
+        raise FlightDataError(f"{path}: Motive CSV Format Version {version:g}, an older layout "
+                              f"than fwid reads (1.2 or later); {_REEXPORT}")
+    if len(lines) < _FIRST_DATA_LINE:
+        raise FlightDataError(f"{path}: the Motive header is cut short (7 header lines expected)")
+    second = [(lines[i].split(",") + ["", ""])[1].strip() for i in (2, 3)]
+    first = lines[6].split(",", 1)[0].strip()
+    if second != ["Type", "Name"] or first != "Frame":
+        raise FlightDataError(
+            f"{path}: lines 3-7 of the Motive export do not name the columns (Type, Name, ID, "
+            f"Rotation/Position, then Frame, Time (Seconds), X, Y, ...); {_REEXPORT}")
+
+
+def _time_base(head, comp, data, path, max_dropout):
+    """`(data on the time base, t, warnings)`: one row per frame from the `Frame` column at
+    the export's frame rate (missing frames: rows of NaN), else the time column (uniform)."""
+    rate = _number(head.get("Export Frame Rate")) or _number(head.get("Capture Frame Rate"))
+    if comp[0] == "Frame" and rate:
+        ft = frame_times(data[:, 0], data[:, 1], rate, path, _FIRST_DATA_LINE, max_dropout)
+        full = np.full((len(ft.t), data.shape[1]), np.nan)
+        full[ft.rows] = data
+        return full, ft.t, ft.warnings
+    t = data[:, 1]
+    dt = check_time(t, path, _FIRST_DATA_LINE, "Time (Seconds)")
+    warnings = []
+    if rate and abs(rate * dt - 1) > 0.01:
+        warnings.append(f"the header's frame rate {rate:g} Hz differs from the time column's "
+                        f"{1 / dt:.6g} Hz; the time column is used")
+    return data, t, warnings
 
 
 def read_motive(path: str, lines: list[str], body: str | None = None, frame: str = "y-up",
@@ -44,17 +115,12 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
     - `max_dropout`: the longest gap (s) accepted.
     """
     head = settings(lines[0])
+    _check_layout(path, lines, head)
     rot = head.get("Rotation Type", "Quaternion")
-    if rot.lower() != "quaternion":
-        raise FlightDataError(
-            f"{path}: rotations exported as {rot} Euler angles; re-export the take from Motive "
-            "with Rotation Type = Quaternion")
-    units = head.get("Length Units", "Meters")
-    if units.lower() not in UNITS:
-        raise FlightDataError(f"{path}: Length Units {units!r} unknown; re-export in Millimeters "
-                              "or Meters")
-    if len(lines) < _FIRST_DATA_LINE:
-        raise FlightDataError(f"{path}: the Motive header is cut short (7 header lines expected)")
+    euler = rot.upper() if rot.upper() in EULER_ORDERS else None
+    if euler is None and rot.lower() != "quaternion":
+        raise FlightDataError(f"{path}: Rotation Type {rot!r} unknown; re-export the take from "
+                              "Motive with Rotation Type = Quaternion")
     rows = [[c.strip() for c in lines[i].rstrip("\r\n").split(",")] for i in range(2, 7)]
     width = max(len(r) for r in rows)
     kind, names, _, group, comp = ((r + [""] * width)[:width] for r in rows)
@@ -74,33 +140,37 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
     for i in range(width):
         if kind[i] == "Rigid Body" and names[i] == body and group[i] in ("Rotation", "Position"):
             where.setdefault((group[i], comp[i].upper()), i)
-    need = [("Rotation", c) for c in "XYZW"] + [("Position", c) for c in "XYZ"]
+    angles = "XYZ" if euler else "XYZW"
+    need = [("Rotation", c) for c in angles] + [("Position", c) for c in "XYZ"]
     lost = [f"{g} {c}" for g, c in need if (g, c) not in where]
     if lost:
+        what = f"{euler} Euler angles" if euler else "a quaternion"
         raise FlightDataError(f"{path}: rigid body {body!r} has no {', '.join(lost)} column(s); "
-                              "export its rotation as a quaternion and its position")
+                              f"export its rotation ({what}, as the header says) and its position")
     data = parse_rows(lines[7:], path, _FIRST_DATA_LINE, width=width)
-    t = data[:, 1]
-    check_time(t, path, _FIRST_DATA_LINE, "Time (Seconds)")
-    rate = _number(head.get("Export Frame Rate", head.get("Capture Frame Rate")))
-    warnings = []
-    dt = float(np.median(np.diff(t)))
-    if rate and abs(rate * dt - 1) > 0.01:
-        warnings.append(f"the header's frame rate {rate:g} Hz differs from the time column's "
-                        f"{1 / dt:.6g} Hz; the time column is used")
-    qxyzw = np.stack([data[:, where[("Rotation", c)]] for c in "XYZW"], 1)
-    q = qxyzw[:, [3, 0, 1, 2]]
-    pos = np.stack([data[:, where[("Position", c)]] for c in "XYZ"], 1) * UNITS[units.lower()]
-    tracked = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(pos), axis=1)
-    check_quaternions(q, tracked, t, path, _FIRST_DATA_LINE)
-    safe = np.where(tracked[:, None], q, [1.0, 0, 0, 0])
-    pos, R = to_ned(pos, quat_to_matrix(safe / np.linalg.norm(safe, axis=1, keepdims=True)), frame)
+    data, t, warnings = _time_base(head, comp, data, path, max_dropout)
+    rot = np.stack([data[:, where[("Rotation", c)]] for c in angles], 1)
+    pos = np.stack([data[:, where[("Position", c)]] for c in "XYZ"], 1)
+    scale, units, said = length_unit(head.get("Length Units"), pos, path)
+    warnings += said
+    pos = pos * scale
+    tracked = np.all(np.isfinite(rot), axis=1) & np.all(np.isfinite(pos), axis=1)
+    if euler:
+        R = euler_to_matrix_ordered(np.deg2rad(np.where(tracked[:, None], rot, 0.0)), euler)
+    else:
+        q = rot[:, [3, 0, 1, 2]]
+        check_quaternions(q, tracked, t, path, _FIRST_DATA_LINE)
+        safe = np.where(tracked[:, None], q, [1.0, 0, 0, 0])
+        R = quat_to_matrix(safe / np.linalg.norm(safe, axis=1, keepdims=True))
+    pos, R = to_ned(pos, R, frame)
     q = continuous_sign(np.where(tracked[:, None], matrix_to_quat(R), np.nan), tracked)
-    cut = trim_untracked(t, pos, q, tracked)
+    kept, said = drop_glitches(t, q, tracked, pos, path)
+    warnings += said
+    cut = trim_untracked(t, pos, q, kept, {"dropped": tracked & ~kept})
     if cut is None:
         raise FlightDataError(f"{path}: rigid body {body!r} is tracked on fewer than 3 rows")
-    t, pos, q, tracked = cut
-    gaps = dropouts(t, tracked, path, max_dropout)
+    t, pos, q, tracked, extra = cut
+    gaps = dropouts(t, tracked, path, max_dropout, extra["dropped"])
     name = take_name(path)
     if onboard is False:
         log = None
@@ -110,8 +180,9 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
         if log is None:
             warnings.append(f"no autopilot log ({name}.onboard.csv) beside the take: the pose "
                             "alone, no controls")
-    return RawTake(name, path, f"Motive CSV export (body {body}, {frame}, {units})", frame, t,
-                   pos, q, tracked, None, log, gaps, warnings)
+    rotation = f"{euler} Euler" if euler else "quaternion"
+    return RawTake(name, path, f"Motive CSV export (body {body}, {frame}, {units}, {rotation})",
+                   frame, t, pos, q, tracked, None, log, gaps, warnings)
 
 
 def read_onboard(path, take: str, given: bool = False) -> OnboardLog | None:

@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._errors import FlightDataError, FwidError, InputError
+from ..data._checks import check_flight
 from ..data._sidefiles import VEHICLE_FILE, read_vehicle
 from ._attitude import smooth_attitude
 from ._body_frame import compose, split
@@ -438,6 +439,11 @@ def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath, has_gyro) -> R
     if res["position_rms_m"] > 3 * tr.sigma or max(res["attitude_rms_rad"]) > 3 * max(att.sigma):
         warnings.append("the smoothed motion departs from the recorded by more than 3 noise "
                         "levels; check the take for glitches")
+    try:  # never an output that fwid itself refuses
+        check_flight(f"{take.name}.csv", t, {k: v for k, v in out.items() if k != "t"})
+    except FlightDataError as e:
+        raise FlightDataError(f"{take.path}: the reconstructed flight fails the flight checks "
+                              f"({e}); check the take for glitches and its frame") from None
     raw = {"t": t, "pos": take.pos[s], "quat": take.quat[s], "tracked": tracked}
     if gyro is not None:
         raw["gyro"] = gyro

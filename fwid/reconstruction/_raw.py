@@ -180,9 +180,11 @@ def check_quaternions(q: np.ndarray, tracked: np.ndarray, t: np.ndarray, path: s
             "column order (scalar first: qw qx qy qz)")
 
 
-def dropouts(t: np.ndarray, tracked: np.ndarray, path: str, max_dropout: float) -> list[list[float]]:
+def dropouts(t: np.ndarray, tracked: np.ndarray, path: str, max_dropout: float,
+             dropped: np.ndarray | None = None) -> list[list[float]]:
     """The `[start, end]` times of each run of lost samples; a run longer than
-    `max_dropout` seconds is a `FlightDataError` naming it."""
+    `max_dropout` seconds is a `FlightDataError` naming it (and, where `dropped` marks
+    samples dropped as glitches or held values, how many of them it holds)."""
     lost = ~tracked
     edges = np.diff(np.concatenate([[0], lost.astype(int), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
@@ -191,10 +193,13 @@ def dropouts(t: np.ndarray, tracked: np.ndarray, path: str, max_dropout: float) 
     for a, b in zip(starts, ends):
         length = (b - a + 1) * dt
         if length > max_dropout + 1e-9:
+            n = 0 if dropped is None else int(np.sum(dropped[a:b + 1]))
+            why = (f" ({n} of its {b - a + 1} frames dropped as glitches or held values)"
+                   if n else "")
             raise FlightDataError(
                 f"{path}: the body is lost for {length:.3g} s from t = {t[a]:.6g} s to "
-                f"{t[b]:.6g} s, longer than the {max_dropout:g} s that are bridged; fill the gap "
-                "in the tracking software, cut the take, or raise --max-dropout")
+                f"{t[b]:.6g} s{why}, longer than the {max_dropout:g} s that are bridged; fill the "
+                "gap in the tracking software, cut the take, or raise --max-dropout")
         out.append([float(t[a]), float(t[b])])
     return out
 

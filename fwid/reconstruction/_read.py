@@ -9,7 +9,7 @@ from .._errors import FlightDataError, InputError
 from ._fwid_raw import read_fwid_raw
 from ._map import RecordingMap, read_map
 from ._mapped import read_mapped, read_mapped_log
-from ._motive import read_motive
+from ._motive import is_old_export, old_export_error, read_motive
 from ._raw import MAX_DROPOUT, RawTake, read_lines
 from ._rotations import FRAMES
 
@@ -36,7 +36,8 @@ def raw_files(paths) -> list[Path]:
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
              onboard=None, max_dropout: float = MAX_DROPOUT, recording_map=None,
              strict_frame: bool = False) -> RawTake:
-    """Read one raw take, either form (CONTRACTS section 5), into north-east-down.
+    """Read one raw take (see the guide's pages on raw recordings and on your lab's
+    recordings) into north-east-down.
 
     **Arguments:**
     - `path`: a fwid raw CSV or a Motive CSV export (its first line starts `Format Version`);
@@ -83,6 +84,8 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
         raise FlightDataError(f"{path}: the map {m.path} has no [tracking] section, which only "
                               "a Motive export (first line 'Format Version') may leave out; "
                               "map the pose's columns in [tracking]")
+    if is_old_export(lines):
+        raise old_export_error(str(path), lines)
     if onboard is not None:
         raise InputError(f"{path}: --onboard is for Motive takes; a fwid raw CSV holds its "
                          "controls itself")

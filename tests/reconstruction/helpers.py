@@ -137,35 +137,54 @@ def write_fwid_raw(path, motion, t, *, seed=0, flip=True, lost=(), frame="ned", 
 
 def write_motive(path, motion, t, *, offset=-3.2071, log_rate=500.0, seed=0, flip=True,
                  lost=(), bias=(0.02, -0.03, 0.01), gyro_noise=0.01, rotation="Quaternion",
-                 units="Millimeters", log=True, pos=None, R=None) -> Path:
+                 units="Millimeters", log=True, pos=None, R=None, length_key=True,
+                 time_decimals=6, missing=()) -> Path:
     """A Motive CSV export of `motion` (y-up, `units`) with a second rigid body `Wand`, and
     its autopilot log `NAME.onboard.csv` on its own clock (`t_tracking = t_onboard +
-    offset`) at `log_rate`."""
+    offset`) at `log_rate`. `rotation`: `Quaternion`, or an Euler order (`XYZ`, ...: the
+    angles about X, Y, Z in degrees, intrinsic in that order); `length_key`: write the
+    `Length Units` key; `time_decimals`: the time column's; `missing`: index ranges of frames
+    left out of the export (rows absent)."""
     rng = np.random.default_rng(seed)
     if pos is None:
         pos, R = noisy(motion, t, rng)
     pm, Rm = pos @ C_YUP, C_YUP.T @ R @ C_YUP
     scale = {"Millimeters": 1e3, "Meters": 1.0}[units]
     q = quats(Rm, flip, rng)
+    euler = rotation if sorted(rotation) == ["X", "Y", "Z"] else None
+    if euler:
+        ang = Rotation.from_matrix(Rm).as_euler(euler, degrees=True)
+        rot = ang[:, [euler.index(c) for c in "XYZ"]]
+        axes, wand_rot = ["X", "Y", "Z"], [0.0, 0.0, 0.0]
+    else:
+        rot = np.column_stack([q[:, 1:], q[:, :1]])
+        axes, wand_rot = ["X", "Y", "Z", "W"], [0.0, 0.0, 0.0, 1.0]
+    k = len(axes)
     rate = 1 / (t[1] - t[0])
     head = (f"Format Version,1.23,Take Name,{Path(path).stem},Take Notes,,Capture Frame Rate,"
             f"{rate:.6f},Export Frame Rate,{rate:.6f},Capture Start Time,2026-11-25 04.01.02.123 PM,"
             f"Capture Start Frame,0,Total Frames in Take,{len(t)},Total Exported Frames,{len(t)},"
-            f"Rotation Type,{rotation},Length Units,{units},Coordinate Space,Global")
+            f"Rotation Type,{rotation}" + (f",Length Units,{units}" if length_key else "")
+            + ",Coordinate Space,Global")
     lines = [head, "",
-             ",Type," + ",".join(["Rigid Body"] * 8 + ["Rigid Body"] * 7),
-             ",Name," + ",".join(["Wand"] * 7 + ["DelFly"] * 8),
-             ",ID," + ",".join(["2"] * 7 + ["1"] * 8),
-             ",," + ",".join(["Rotation"] * 4 + ["Position"] * 3 + ["Rotation"] * 4
+             ",Type," + ",".join(["Rigid Body"] * (k + 4) + ["Rigid Body"] * (k + 3)),
+             ",Name," + ",".join(["Wand"] * (k + 3) + ["DelFly"] * (k + 4)),
+             ",ID," + ",".join(["2"] * (k + 3) + ["1"] * (k + 4)),
+             ",," + ",".join(["Rotation"] * k + ["Position"] * 3 + ["Rotation"] * k
                             + ["Position"] * 3 + ["Mean Marker Error"]),
-             "Frame,Time (Seconds)," + ",".join(["X", "Y", "Z", "W", "X", "Y", "Z"] * 2 + [""])]
+             "Frame,Time (Seconds)," + ",".join((axes + ["X", "Y", "Z"]) * 2 + [""])]
     lost_rows = set(i for a, b in lost for i in range(a, b))
+    gone = set(i for a, b in missing for i in range(a, b))
     for i in range(len(t)):
-        wand = [0.0, 0.0, 0.0, 1.0, 100.0, 5.0, 20.0]
-        body = [*q[i, 1:], q[i, 0], *(pm[i] * scale)]
-        cells = [str(i), f"{t[i]:.6f}"] + [f"{v:.6f}" for v in wand] + [f"{v:.6f}" for v in body] + ["0.1"]
+        if i in gone:
+            continue
+        wand = wand_rot + [100.0 + 1e-3 * i, 5.0, 20.0]
+        body = [*rot[i], *(pm[i] * scale)]
+        time = np.floor(t[i] * 10**time_decimals + 1e-6) / 10**time_decimals  # truncated
+        cells = ([str(i), f"{time:.{time_decimals}f}"] + [f"{v:.6f}" for v in wand]
+                 + [f"{v:.6f}" for v in body] + ["0.1"])
         if i in lost_rows:
-            cells[9:16] = [""] * 7
+            cells[2 + k + 3:2 + 2 * (k + 3)] = [""] * (k + 3)
         lines.append(",".join(cells))
     Path(path).write_text("\n".join(lines) + "\n")
     write_vehicle(Path(path).parent)

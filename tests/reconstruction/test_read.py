@@ -72,8 +72,8 @@ def _uneven(tmp_path, motion):
 
 
 CASES = {
-    "euler-motive": (lambda tp, m: (_motive(tp, m, rotation="XYZ"), ["--body", "DelFly"]),
-                     ["Euler", "Rotation Type = Quaternion"]),
+    "rotation-type": (lambda tp, m: (_motive(tp, m, rotation="Matrix"), ["--body", "DelFly"]),
+                      ["Rotation Type 'Matrix'", "Rotation Type = Quaternion"]),
     "euler-fwid": (_euler_fwid, ["Euler", "qw qx qy qz"]),
     "unknown-body": (lambda tp, m: (_motive(tp, m), ["--body", "Bee"]),
                      ["'Bee'", "Wand, DelFly", "--body"]),
@@ -102,8 +102,8 @@ def test_bad_input_message_and_exit_code(tmp_path, motion, capsys, case):
 
 
 def test_read_raw_refuses_the_same(tmp_path, motion):
-    with pytest.raises(FlightDataError, match="Euler"):
-        read_raw(_motive(tmp_path, motion, rotation="XYZ"), body="DelFly")
+    with pytest.raises(FlightDataError, match="Rotation Type 'Matrix' unknown"):
+        read_raw(_motive(tmp_path, motion, rotation="Matrix"), body="DelFly")
 
 
 def test_bad_take_is_answered_before_jax(tmp_path, motion):
