@@ -9,8 +9,10 @@ longitudinal 3211/doublet/211/pulse inputs), recorded around the default (Motive
 y-up mm, 200 Hz, 0.4 mm and 0.15 deg pose noise, 0.5 % dropouts, autopilot log at 512 Hz on a
 clock offset by a random -200..200 s), varying one factor at a time: pose noise 0.1-2 mm
 (attitude noise in proportion), tracking rate 100-500 Hz, dropout share 0-5 %, the clock
-offset; plus the fwid raw CSV (NED, one file, sign-flipping quaternions), and takes of 30 s
-and 60 s (a manoeuvre in the first seconds, then steady flight).
+offset; plus the fwid raw CSV (NED, one file, sign-flipping quaternions), and takes of 30 s,
+60 s and 90 s (a manoeuvre in the first seconds, then steady flight; real takes run 75-90 s),
+the last also as a fwid raw CSV (no gyro). `--only TEXT` runs the cases whose name holds
+TEXT (e.g. `--only "90 s" --no-speed`) and writes a results file only where `--out` is given.
 
 **Errors** (`error`): over the overlap of take and log less 0.5 s at each end, against
 `truth/NAME.csv` on the same frames. Cycle-averaged (`ca`): both low-passed at 5 Hz
@@ -66,7 +68,9 @@ def grid(quick: bool) -> list[dict]:
     cases += [(f"dropouts {100 * d:g} %", {"dropouts": d}) for d in drops]
     cases += [(f"clock offset {o:g} s", {"clock_offset": o}) for o in offsets]
     cases += [("fwid raw CSV (NED)", {"raw": "fwid"})]
-    cases += [("take of 30 s", {"duration": 30.0}), ("take of 60 s", {"duration": 60.0})]
+    cases += [("take of 30 s", {"duration": 30.0}), ("take of 60 s", {"duration": 60.0}),
+              ("take of 90 s", {"duration": 90.0}),
+              ("fwid raw CSV (NED), 90 s", {"raw": "fwid", "duration": 90.0})]
     return [{"case": name, **DEFAULT, **over} for name, over in cases]
 
 
@@ -271,8 +275,12 @@ def main(argv=None) -> None:
     ap.add_argument("--speed-takes", type=int, default=None, help="takes of the speed row (16; quick: 4)")
     ap.add_argument("--speed-duration", type=float, default=None,
                     help="seconds per take of the speed row (60; quick: 20)")
-    ap.add_argument("--out", default=str(HERE / "results" / "reconstruction.json"))
+    ap.add_argument("--only", default=None,
+                    help="run only the cases whose name holds this text (no results file without --out)")
+    ap.add_argument("--out", default=None, help="results JSON (default: benchmarks/results/reconstruction.json)")
     args = ap.parse_args(argv)
+    if args.out is None and args.only is None:
+        args.out = str(HERE / "results" / "reconstruction.json")
     takes = args.takes or (1 if args.quick else 2)
     duration = args.duration or (6.0 if args.quick else 10.0)
     import _provenance
@@ -281,6 +289,8 @@ def main(argv=None) -> None:
     res = {"provenance": prov, "machine": f"{platform.machine()}, {os.cpu_count()} CPUs", "load_start": os.getloadavg()[0],
            "cases": []}
     for i, case in enumerate(grid(args.quick)):
+        if args.only is not None and args.only not in case["case"]:
+            continue
         with tempfile.TemporaryDirectory() as tmp:
             r = one_case(case, takes, duration, 100 + i, Path(tmp))
         res["cases"].append(r)
@@ -294,6 +304,9 @@ def main(argv=None) -> None:
                                  args.speed_duration or (20.0 if args.quick else 60.0))
         print(json.dumps({k: v for k, v in res["speed"].items() if not isinstance(v, dict)}), flush=True)
     res["load_end"] = os.getloadavg()[0]
+    if args.out is None:
+        print(markdown(res))
+        return
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(_provenance.json_text(res, prov, indent=1))
