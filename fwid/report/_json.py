@@ -68,7 +68,7 @@ def write_json(path: str | Path, obj) -> Path:
 
     **Returns:** the path written.
     """
-    return write_text(path, json.dumps(_clean(obj), indent=2) + "\n")
+    return write_text(path, json.dumps(_clean(obj), indent=2, allow_nan=False) + "\n")
 
 
 def parameters_csv(parameters: dict) -> str:
