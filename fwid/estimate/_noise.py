@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .._errors import FitDivergedError
-from ._advice import advice
+from .._advice import advice
 from ._warnings import R_COND_MAX, model_error_signature, r_condition
 
 NOISE_MODELS = ("auto", "full", "diagonal")

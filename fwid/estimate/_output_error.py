@@ -17,7 +17,7 @@ from ..simulation._buckets import bucket_length, pad_experiment
 from ..simulation._experiment import Experiment, stack_experiments
 from ..simulation._simulate import simulate, simulate_sensitivities
 from . import _exported as exported
-from ._advice import advice
+from .._advice import advice
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back

@@ -20,7 +20,7 @@ from .._errors import ExcitationError
 from ..models._greybox import GreyBoxModel
 from ..simulation._checks import check_experiment
 from ..simulation._experiment import Experiment
-from ._advice import advice
+from .._advice import advice
 from ._prior import PriorBounds
 from ._start import least_squares_start
 

@@ -19,7 +19,7 @@ import equinox as eqx
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
-from ._advice import advice
+from .._advice import advice
 
 #: Warn when the fastest unstable mode grows more than this factor over the record.
 GROWTH_MAX = 100.0

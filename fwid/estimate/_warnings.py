@@ -19,7 +19,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._errors import FitWarning
-from ._advice import advice
+from .._advice import advice
 
 #: R whose correlation form (unit diagonal, so independent of the outputs' units) has a larger
 #: condition number is reported as ill-conditioned.

@@ -27,6 +27,9 @@ EXPORTS = {
     "_diagnosis": (
         "diagnosis_summary", "plot_gap_map", "plot_gap_sim", "write_diagnosis",
     ),
+    "_failure": (
+        "failure_reason",
+    ),
     "_figures": (
         "plot_flight_fit", "plot_poles",
     ),

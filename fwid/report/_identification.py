@@ -166,7 +166,9 @@ def identification_report(ident) -> dict:
         "trim_and_vehicle": ident.consts,
         "state_space": ident.state_space().to_json(),
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
-        "warnings": fit_warnings_of(ident.fits),
+        "warnings": [*getattr(ident, "warnings", ()), *fit_warnings_of(ident.fits)],
+        "closed_loop": {c.flight: c.to_json()
+                        for c in getattr(ident, "closed_loop", ()) if c is not None},
     }
     add_validation(report, ident.validation)
     if len(ident.fits) == 1:

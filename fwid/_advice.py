@@ -20,7 +20,7 @@ REMEDIES = {
     "full-noise": ("noise='full'", "the Python call fwid.fit(..., noise='full')"),
     "max-steps": ("raise max_steps", "raise max_steps (the Python call fwid.fit(..., "
                   "max_steps=...))"),
-    "fix": ("`model.with_free(...)`", "pin it with --prior and a tiny std, or in Python "
+    "fix": ("`model.with_free(...)`", "pin them with --prior and a tiny std, or in Python "
             "`model.with_free(...)`"),
     "start": ("give start values (`start=model.with_params(...)`)",
               "give start values (the Python call fwid.fit(..., "
