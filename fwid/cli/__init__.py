@@ -1,4 +1,4 @@
-"""The `fwid` command line (CONTRACTS section 2): thin, it calls the public API.
+"""The `fwid` command line: thin, it calls the public API.
 
 One module per command: `fwid simulate` (`_simulate.py`), `fwid template` (`_template.py`), `fwid identify` (`_identify.py`,
 all four models), `fwid diagnose` (`_diagnose.py`), `fwid reconstruct` (`_reconstruct.py`),

@@ -1,4 +1,4 @@
-"""The `report.json` of `fwid identify --model lon|lat` (CONTRACTS section 3) and the blocks
+"""The `report.json` of `fwid identify --model lon|lat` (the report format) and the blocks
 every pipeline's report shares: parameters, fit information, pooled metrics, mode spread."""
 
 from __future__ import annotations
@@ -143,7 +143,7 @@ def add_validation(report: dict, validation) -> dict:
 
 
 def identification_report(ident) -> dict:
-    """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict.
+    """The `report.json` of `fwid identify` (the report format), as a dict.
 
     **Arguments:**
 

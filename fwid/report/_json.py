@@ -1,4 +1,4 @@
-"""Machine-readable reports (CONTRACTS section 3), written whole or not at all."""
+"""Machine-readable reports (the report format), written whole or not at all."""
 
 from __future__ import annotations
 
