@@ -11,7 +11,8 @@ import warnings
 from pathlib import Path
 
 from .._errors import InputError
-from ._inputs import IDENTIFY_COLUMNS, VEHICLE_MODELS, check_paths, read_sets
+from ._inputs import (CONTROLS, IDENTIFY_COLUMNS, VEHICLE_MODELS, check_controls, check_paths,
+                      read_sets)
 
 
 def _stem(name: str) -> str:
@@ -56,8 +57,10 @@ def identify(args) -> int:
     args.method = method
     args.prior_values, args.bounds_values = prior, bounds
     vehicle = args.model if args.model in VEHICLE_MODELS else None
-    train, held_out = read_sets(args.data, args.validate,
-                                require=IDENTIFY_COLUMNS[args.model], vehicle_for=vehicle)
+    require = [c for c in IDENTIFY_COLUMNS[args.model] if c != CONTROLS.get(args.model)]
+    train, held_out = read_sets(args.data, args.validate, require=require, vehicle_for=vehicle)
+    check_controls(train, args.model)
+    check_controls(held_out, args.model)
     import fwid  # JAX from here on: every file has been read and checked
 
     flights = fwid.data.build_flights(train)
@@ -122,7 +125,7 @@ def _cycle_averaged(args, flights, validate):
                           cutoff=args.cutoff, progress=not args.quiet,
                           prior=args.prior_values, bounds=args.bounds_values,
                           method=args.method)
-    report = fwid.identification_report(ident)
+    report = {**fwid.identification_report(ident), "method": args.method}
     parts = []
     comparison = None
     if args.joint and validate and len(flights) > 1:  # does sharing pay off?
