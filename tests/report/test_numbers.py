@@ -50,3 +50,4 @@ def test_report_json_holds_null_for_non_finite_numbers(tmp_path):
     assert "NaN" not in text and "Infinity" not in text
     assert json.loads(text) == {"r2": None, "m": [None, 1.0]}
     assert math.isfinite(json.loads(text)["m"][1])
+
