@@ -12,7 +12,7 @@ import numpy as np
 
 from . import tc02
 from . import tc04
-from . import tc08
+from . import tc08 as tc08_case
 from .textbook import fwid_model
 
 #: The book's filter-error estimates of TC04 (chapter 7 ``mDefCase04``, ``parFEM``).
@@ -52,34 +52,35 @@ def _timed_fit(model, exps, **kw):
 def tc08() -> dict:
     """FVSysID TC08, the unstable aircraft, by multiple shooting from the book's start values
     (Zq fixed as the book); the errors from the values the data were simulated with."""
-    case = tc08.CASE
-    model = fwid_model(case).with_free(tc08.FREE)
+    case = tc08_case.CASE
+    model = fwid_model(case).with_free(tc08_case.FREE)
     exps = _experiments(case)
     res, wall = _timed_fit(model, exps, method="multiple-shooting")
     out = _table(model, res, case.names)
     est = {k: v["value"] for k, v in out.items()}
-    eig = tc08.eigenvalues(est)
+    eig = tc08_case.eigenvalues(est)
     oem, oem_wall = _timed_fit(model, exps)
     oem_est = {**est, **dict(zip(oem.names, map(float, oem.theta)))}
     out["_fwid"] = {
         "method": "multiple-shooting", "converged": bool(res.converged),
         "steps": int(res.steps), "noise": res.noise, "wall_s": wall,
-        "eigenvalues": eig.tolist(), "true_eigenvalues": list(tc08.TRUE_EIGENVALUES),
-        "error_pct": {k: 100 * (est[k] / v - 1) for k, v in tc08.TRUE.items()},
-        "eigenvalue_error_pct": (100 * (eig / np.array(tc08.TRUE_EIGENVALUES) - 1)).tolist(),
+        "eigenvalues": eig.tolist(), "true_eigenvalues": list(tc08_case.TRUE_EIGENVALUES),
+        "error_pct": {k: 100 * (est[k] / v - 1) for k, v in tc08_case.TRUE.items()},
+        "eigenvalue_error_pct":
+            (100 * (eig / np.array(tc08_case.TRUE_EIGENVALUES) - 1)).tolist(),
         "warnings": list(res.warnings),
         "plain_output_error": {
             "converged": bool(oem.converged), "noise": oem.noise,
             "values": {k: oem_est[k] for k in case.names},
-            "eigenvalues": tc08.eigenvalues(oem_est).tolist(), "wall_s": oem_wall,
+            "eigenvalues": tc08_case.eigenvalues(oem_est).tolist(), "wall_s": oem_wall,
             "warnings": list(oem.warnings)},
     }
     print(f"\n{case.title}: multiple shooting "
           f"{'converged' if bool(res.converged) else 'NOT converged'} in {int(res.steps)} "
           f"steps, {wall:.1f} s; eigenvalues {eig.round(4)}")
-    for k, v in tc08.TRUE.items():
+    for k, v in tc08_case.TRUE.items():
         print(f"  {k:<5}{est[k]:>10.5g}  true {v:>9.5g}  {100 * (est[k] / v - 1):+.2f} %")
-    print(f"  plain output error: eigenvalues {tc08.eigenvalues(oem_est).round(4)}")
+    print(f"  plain output error: eigenvalues {tc08_case.eigenvalues(oem_est).round(4)}")
     return out
 
 

@@ -1,4 +1,4 @@
-"""The `fwid` command line (CONTRACTS section 2): thin, it calls the public API.
+"""The `fwid` command line: thin, it calls the public API.
 
 One module per command: `fwid simulate` (`_simulate.py`), `fwid template` (`_template.py`), `fwid identify` (`_identify.py`,
 all four models), `fwid diagnose` (`_diagnose.py`), `fwid reconstruct` (`_reconstruct.py`),
@@ -46,15 +46,28 @@ def run(argv=None) -> int:
     return main(argv)
 
 
+def _one_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as the command line prints it: one line, no source location."""
+    print(f"fwid: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def main(argv=None) -> int:
-    from fwid._errors import InputError
+    import warnings
+
+    from fwid._errors import FitDivergedError, InputError
+    from fwid._advice import command_line
 
     args = parser().parse_args(argv)
     try:
-        return COMMANDS[args.command](args)
+        with warnings.catch_warnings(), command_line():
+            warnings.showwarning = _one_line
+            return COMMANDS[args.command](args)
     except InputError as e:
         print(f"fwid: error: {e}", file=sys.stderr)
         return 2
+    except FitDivergedError as e:  # a fit that failed, not a bug: say why
+        print(f"fwid: error: {e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("fwid: interrupted", file=sys.stderr)
         return 1

@@ -1,5 +1,5 @@
 """`fwid design`: the test input for the next flight, designed through the identified model
-(CONTRACTS section 6)."""
+(the test-input format)."""
 
 from __future__ import annotations
 

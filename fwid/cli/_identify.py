@@ -7,10 +7,12 @@ from __future__ import annotations
 import json
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from .._errors import InputError
-from ._inputs import IDENTIFY_COLUMNS, VEHICLE_MODELS, check_paths, read_sets
+from ._inputs import (CONTROLS, IDENTIFY_COLUMNS, VEHICLE_MODELS, check_controls, check_paths,
+                      read_sets)
 
 
 def _stem(name: str) -> str:
@@ -45,18 +47,32 @@ def identify(args) -> int:
     if (prior is not None or bounds is not None) and args.model not in ("lon", "lat"):
         raise InputError(f"--prior and --bounds apply to --model lon or lat, not {args.model}; "
                          "drop them")
+    method = getattr(args, "method", "output-error")
+    if method != "output-error" and args.model not in ("lon", "lat"):
+        raise InputError(f"--method {method} applies to --model lon or lat, not {args.model} "
+                         "(fitted by regression); drop it")
+    if (prior is not None or bounds is not None) and method != "output-error":
+        raise InputError(f"--prior and --bounds work with --method output-error only, not "
+                         f"--method {method}; drop them, or fit by output error")
+    args.method = method
     args.prior_values, args.bounds_values = prior, bounds
     vehicle = args.model if args.model in VEHICLE_MODELS else None
-    train, held_out = read_sets(args.data, args.validate,
-                                require=IDENTIFY_COLUMNS[args.model], vehicle_for=vehicle)
+    require = [c for c in IDENTIFY_COLUMNS[args.model] if c != CONTROLS.get(args.model)]
+    train, held_out = read_sets(args.data, args.validate, require=require, vehicle_for=vehicle)
+    check_controls(train, args.model)
+    check_controls(held_out, args.model)
     import fwid  # JAX from here on: every file has been read and checked
 
     flights = fwid.data.build_flights(train)
     validate = fwid.data.build_flights(held_out)
-    if args.model in ("flap", "combined"):
-        report, figures = _flapping(args, flights, validate)
-    else:
-        report, figures = _cycle_averaged(args, flights, validate)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        if args.model in ("flap", "combined"):
+            report, figures, summary = _flapping(args, flights, validate)
+        else:
+            report, figures, summary = _cycle_averaged(args, flights, validate)
+    report["warnings"] = _warnings_once(report, caught)
+    print(summary(report))
     if args.figures == "none":
         figures = []
     if args.out:
@@ -73,15 +89,28 @@ def identify(args) -> int:
     return _exit_code(report)
 
 
+def _warnings_once(report: dict, caught) -> list[str]:
+    """Every warning of the run once, in order: the report's own (the fits'), then those
+    the run issued besides (missing force columns, a closed loop, ...). Warnings of other
+    kinds (a library's) are printed as one line each and left out of the report."""
+    found = list(report.get("warnings") or [])
+    for w in caught:
+        if issubclass(w.category, UserWarning):
+            found.append(str(w.message))
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return list(dict.fromkeys(found))
+
+
 def _exit_code(report: dict) -> int:
-    """1, with one line on stderr naming the flights, when no fit converged; else 0."""
-    from fwid.report import converged_flags
+    """1, with one line on stderr naming the flights and why, when no fit converged;
+    else 0."""
+    from fwid.report import converged_flags, failure_reason
 
     flags = converged_flags(report)
     if flags and not any(flags):
-        print(f"fwid: error: no fit converged (flights: {', '.join(report['flights'])}); "
-              "see the warnings above" + (" and in report.json" if report.get("warnings")
-                                           is not None else ""), file=sys.stderr)
+        print(f"fwid: error: no fit converged (flights: {', '.join(report['flights'])}): "
+              f"{failure_reason(report)}", file=sys.stderr)
         return 1
     return 0
 
@@ -94,20 +123,22 @@ def _cycle_averaged(args, flights, validate):
 
     ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
                           cutoff=args.cutoff, progress=not args.quiet,
-                          prior=args.prior_values, bounds=args.bounds_values)
-    report = fwid.identification_report(ident)
-    print(identification_summary(report))
+                          prior=args.prior_values, bounds=args.bounds_values,
+                          method=args.method)
+    report = {**fwid.identification_report(ident), "method": args.method}
+    parts = []
     comparison = None
     if args.joint and validate and len(flights) > 1:  # does sharing pay off?
         comparison = fwid.compare_joint(flights, args.model, validate=validate, joint=ident,
                                         cutoff=args.cutoff, progress=not args.quiet,
-                                        prior=args.prior_values, bounds=args.bounds_values)
+                                        prior=args.prior_values, bounds=args.bounds_values,
+                                        method=args.method)
         report["joint_vs_individual"] = joint_report(comparison)
-        print("\n" + joint_summary(comparison))
         spread = report["joint_vs_individual"]["modes"]["individual_spread"]
-        print("\n" + spread_table(spread, f"mode spread over the {spread['flights']} training "
-                                           "flights, each fitted alone (the joint model's "
-                                           "modes are above):"))
+        parts += ["\n" + joint_summary(comparison),
+                  "\n" + spread_table(spread, f"mode spread over the {spread['flights']} "
+                                             "training flights, each fitted alone (the joint "
+                                             "model's modes are above):")]
 
     def figures(out):
         fits = [*ident.estimation, *ident.validation]
@@ -131,7 +162,10 @@ def _cycle_averaged(args, flights, validate):
                         highlight=0 if args.joint else None,
                         title=f"{args.model} model eigenvalues")
 
-    return report, [figures]
+    def summary(report):
+        return "\n".join([identification_summary(report), *parts])
+
+    return report, [figures], summary
 
 
 def _flapping(args, flights, validate):
@@ -193,5 +227,4 @@ def _flapping(args, flights, validate):
         figures.append(lambda out: fwid.plot_poles(
             [ident.eigenvalues], ["cycle-averaged part"], path=out / "poles.png",
             title="combined model: eigenvalues of the cycle-averaged part"))
-    print(flapping_summary(report))
-    return report, figures
+    return report, figures, flapping_summary

@@ -18,6 +18,8 @@ IDENTIFY_COLUMNS = {
     "flap": ("f",),
     "combined": ("f",),
 }
+#: The control each cycle-averaged model is driven by.
+CONTROLS = {"lon": "de", "lat": "dr"}
 #: Models whose constants (mass, inertia, g) come from `vehicle.json`.
 VEHICLE_MODELS = ("lon", "lat", "combined")
 #: The columns every flight needs for `fwid diagnose --axis A` (`fwid.diagnose`'s own list).
@@ -32,6 +34,34 @@ def check_paths(*groups) -> None:
     for p in (p for group in groups for p in group or ()):
         if not Path(p).exists():
             raise FlightDataError(f"{p}: no such file or folder")
+
+
+def check_controls(records, model: str) -> None:
+    """A `FlightDataError` when no flight carries the control that drives `model` (the
+    column is absent, or it never moves): there is nothing to identify the model's response
+    from. A flight without the column while others have it is named alone."""
+    import numpy as np
+
+    control = CONTROLS.get(model)
+    if control is None or not records:
+        return
+    lacking = [r.path for r in records if control not in r.columns]
+    if len(lacking) == len(records):
+        raise FlightDataError(
+            f"the flights carry no controls (no {control!r} column in {', '.join(lacking)}): "
+            f"the {model} model is identified from the response to {control}; add the column "
+            "(e.g. from the autopilot's log)")
+    if lacking:
+        raise FlightDataError(f"{lacking[0]}: missing column {control!r}, the control the "
+                              f"{model} model is driven by")
+    still = [r for r in records if np.ptp(r.columns[control]) == 0]
+    if len(still) == len(records):
+        value = float(records[0].columns[control][0])
+        raise FlightDataError(
+            f"the flights carry no controls: {control!r} never moves in "
+            f"{', '.join(r.path for r in still)} (constant {value:.4g}); there is no "
+            f"manoeuvre to identify the {model} model from; use flights with a doublet or "
+            "3211 input")
 
 
 def read_sets(*groups, require=(), vehicle_for: str | None = None) -> list[list]:

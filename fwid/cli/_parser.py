@@ -1,5 +1,5 @@
-"""The `fwid` command line's arguments (CONTRACTS section 2): every option with its help,
-default and choices."""
+"""The `fwid` command line's arguments (the command line of the guide's 'Formats and
+interfaces' page): every option with its help, default and choices."""
 
 from __future__ import annotations
 
@@ -23,6 +23,19 @@ class _Effects(Sequence):
         return len(self._all())
 
 
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Help that says an option's default where it tells something: not for a flag (on or
+    off is in its name), not for `None` (the help says what happens without the option),
+    and not twice (a help that already names its default)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (action.default is None or isinstance(action.default, bool)
+                or action.default is argparse.SUPPRESS or "default" in text.lower()):
+            return text
+        return super()._get_help_string(action)
+
+
 def _prefix(text: str) -> str:
     """A `--prefix` that makes plain file names (letters, digits, `-`, `_`, `.`)."""
     if not text or text[0] == "." or not all(c.isalnum() or c in "-_." for c in text):
@@ -34,7 +47,7 @@ def _prefix(text: str) -> str:
 def parser() -> argparse.ArgumentParser:
     from fwid import __version__
 
-    fmt = argparse.ArgumentDefaultsHelpFormatter
+    fmt = _Formatter
     p = argparse.ArgumentParser(
         prog="fwid",
         description="Identify flapping-wing vehicle dynamics from flight data (Armanini et al.).",
@@ -63,7 +76,8 @@ def parser() -> argparse.ArgumentParser:
                    "lon_0.csv, ...), so that sets written by separate calls never collide")
     s.add_argument("--duration", type=float, default=4.5, help="seconds per flight")
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
-    r = s.add_argument_group("raw recordings (CONTRACTS section 5; the 6-DOF nonlinear flight)")
+    r = s.add_argument_group("raw recordings (the guide's 'Formats and interfaces' page, "
+                             "docs/reference/formats.md; the 6-DOF nonlinear flight)")
     r.add_argument("--raw", nargs="?", const="fwid", choices=("fwid", "motive"), default=None,
                    help="write raw recordings instead of flights: the fwid raw CSV (NED), or a "
                         "Motive CSV export (y-up mm, a second rigid body) with the autopilot log "
@@ -105,6 +119,12 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: one overview of all flights' fits (the worst and best few "
                    "when many) and the poles (summary), plus one figure per flight (all), or "
                    "none; flap/combined: their figures (summary, all) or none")
+    i.add_argument("--method", choices=("output-error", "multiple-shooting", "filter-error"),
+                   default="output-error",
+                   help="lon/lat: the estimator: output error (the paper's), multiple shooting "
+                   "(an unstable vehicle: the simulation restarts from the measured states "
+                   "every few samples) or filter error (process noise, closed-loop flights: "
+                   "a Kalman filter in the likelihood)")
     i.add_argument("--prior", default=None, metavar="PRIOR.json",
                    help="lon/lat: a Gaussian prior on parameters, {\"Mq\": {\"mean\": .., "
                    "\"std\": ..}, ..}, or an earlier report.json (its parameters and std): "
@@ -115,7 +135,8 @@ def parser() -> argparse.ArgumentParser:
     i.add_argument("--quiet", action="store_true", help="no progress lines")
 
     rc = sub.add_parser("reconstruct", help="raw tracking takes and autopilot logs to flights: "
-                        "smoothed states and loads (CONTRACTS section 5)", formatter_class=fmt)
+                        "smoothed states and loads (the guide's 'Formats and interfaces' page, "
+                        "docs/reference/formats.md)", formatter_class=fmt)
     rc.add_argument("raw", nargs="+", metavar="RAW",
                     help="raw takes: fwid raw CSVs or Motive CSV exports, or folders of them "
                     "(their top-level *.csv, not *.onboard.csv)")
@@ -164,7 +185,8 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--quiet", action="store_true", help="no progress lines")
 
     g = sub.add_parser("design", help="design the control input of the next flight through "
-                                      "the identified model (D-optimal)", formatter_class=fmt)
+                                      "the identified model (smallest parameter variances, "
+                                      "or D-optimal)", formatter_class=fmt)
     g.add_argument("--model", choices=("lon", "lat"), default=None,
                    help="the model of the report: elevator (lon) or rudder (lat) input")
     g.add_argument("--from", dest="source", default=None, metavar="REPORT.json",

@@ -1,5 +1,5 @@
 """`fwid reconstruct`: raw tracking takes (and autopilot logs) to section-1 flights, with
-`reconstruction.json` and one figure per take (CONTRACTS section 5)."""
+`reconstruction.json` and one figure per take (the raw-recording formats)."""
 
 from __future__ import annotations
 

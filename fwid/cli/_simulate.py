@@ -1,5 +1,5 @@
 """`fwid simulate`: write simulated DelFly-like flights (the embedded default data), or with
-`--raw` the raw recordings of 6-DOF flights (CONTRACTS section 5)."""
+`--raw` the raw recordings of 6-DOF flights (the raw-recording formats)."""
 
 from __future__ import annotations
 

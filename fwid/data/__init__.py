@@ -1,4 +1,4 @@
-"""Flight data: reading, checking and trimming the flights of CONTRACTS section 1.
+"""Flight data: reading, checking and trimming the flights of the flight-data format.
 
 `import fwid.data` imports no JAX: the loader reads and checks every file with numpy, so a
 bad file is answered before JAX is imported; `Flight` and `Vehicle` (equinox pytrees) are

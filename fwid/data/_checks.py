@@ -9,7 +9,7 @@ Read from a file, places are given as the lines an editor shows (1-based, the he
 counted: the first sample under a one-line header is line 2); called directly on arrays, as
 0-based sample indices ("row 0" is the first sample).
 
-The strict checks apply to the columns of CONTRACTS section 1 (`KNOWN_COLUMNS`) and to the
+The strict checks apply to the columns of the flight-data format (`KNOWN_COLUMNS`) and to the
 columns a model requires; other (extra) columns are kept as they are and never used by fwid.
 """
 
@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # jaxtyping's ArrayLike imports JAX, which reading a file nee
 
 from .._errors import FlightDataError
 
-#: The columns of CONTRACTS section 1.
+#: The columns of the flight-data format.
 KNOWN_COLUMNS = (
     "t", "q", "u", "w", "theta", "p", "r", "v", "phi", "psi",
     "de", "dr", "f", "X", "Y", "Z", "L", "M", "N",

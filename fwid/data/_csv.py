@@ -34,7 +34,7 @@ def read_csv(
     """All numeric columns of the CSV by name (`t` included), in file order, and each
     sample's line in the file (1-based, the header counted: as an editor shows it).
 
-    Columns named in CONTRACTS section 1 or in `require` must be fully numeric (an empty
+    Columns named in the flight-data format or in `require` must be fully numeric (an empty
     cell reads as NaN, caught later); an extra column with non-numeric cells is dropped.
     """
     try:

@@ -11,7 +11,7 @@ from .._errors import FlightDataError
 
 
 class Vehicle(eqx.Module):
-    """Mass and inertia of the vehicle (`vehicle.json`, CONTRACTS section 1).
+    """Mass and inertia of the vehicle (`vehicle.json`, the flight-data format).
 
     **Arguments:** `mass` [kg], `Ix`, `Iy`, `Iz`, `Ixz` [kg m^2], `g` [m/s^2].
     """

@@ -1,6 +1,6 @@
 """Reading flights (`NAME.csv`, its sidecar `NAME.json`) and `vehicle.json` from disk.
 
-The on-disk format is CONTRACTS section 1: one CSV per flight with a header row, comma
+The on-disk format is the flight-data format: one CSV per flight with a header row, comma
 separated, uniformly sampled; `vehicle.json` beside the CSV files.
 
 Reading is in two steps: every file is read and checked with numpy first (`_read`), then

@@ -1,5 +1,5 @@
 """The JSON files beside a flight's CSV, read without JAX: `vehicle.json` (mass and
-inertia) and the sidecar `NAME.json` (trim values, first input), CONTRACTS section 1."""
+inertia) and the sidecar `NAME.json` (trim values, first input), the flight-data format."""
 
 from __future__ import annotations
 

@@ -172,7 +172,7 @@ def check_flapping_frequency(
 
     **Arguments:**
 
-    - `f_column`: the measured flapping frequency `f` [Hz] (CONTRACTS section 1).
+    - `f_column`: the measured flapping frequency `f` [Hz] (the flight-data format).
     - `x`: a signal beating at the flapping frequency (a force, a rate, the elevator).
     - `dt`: sample step [s].
     - `tolerance`: largest accepted relative difference between the mean of `f_column` and the

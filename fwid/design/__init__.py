@@ -1,4 +1,4 @@
-"""Test inputs designed through the identified model (CONTRACTS section 6).
+"""Test inputs designed through the identified model (the test-input format).
 
 - `_signals.py`: the design grid, the two parametrisations (multisine with free amplitudes and
   phases; a free piecewise-constant sequence) and the classic inputs (doublet, 3211,

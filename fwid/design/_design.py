@@ -1,5 +1,5 @@
 """`design_input`: the test input for the next flight that minimises the predicted standard
-deviations of the parameters, by gradients through the model (CONTRACTS section 6)."""
+deviations of the parameters, by gradients through the model (the test-input format)."""
 
 from __future__ import annotations
 
@@ -83,7 +83,7 @@ class Design(eqx.Module):
                 for k, a, b, r in zip(self.names, self.std, self.std_3211, self.ratio)}
 
     def to_json(self) -> dict:
-        """The `design.json` of `fwid design` (CONTRACTS section 6)."""
+        """The `design.json` of `fwid design` (the test-input format)."""
         return {
             "model": self.settings.get("model"),
             "control": self.control,
@@ -190,7 +190,7 @@ def design_input(
     fast: bool | None = None,
     progress=False,
 ) -> Design:
-    """Design the control input for the next flight (CONTRACTS section 6).
+    """Design the control input for the next flight (the test-input format).
 
     Maximises a criterion of the Fisher information `M = sum_k S_k^T R^-1 S_k` of the
     vehicle's free parameters (the Cramer-Rao covariance's inverse, Eqs. 10-11; the

@@ -1,4 +1,4 @@
-"""The catalogue of unmodelled effects (CONTRACTS section 4) as augmentations of the model.
+"""The catalogue of unmodelled effects (the effect names) as augmentations of the model.
 
 Each `Effect` adds a group of regressors to the cycle-averaged linear load model of Eqs. (2-6)
 (`base_columns`), shared by all flights. None of them is tuned to a particular simulator: each

@@ -31,7 +31,7 @@ class Diagnosis:
     baseline's cycle-averaged held-out residual, `_disturbance.py`), `process_noise` (with a
     `"random-disturbance"` verdict, the baseline fitted by filter error on the training
     flights: the process noise F it takes and whether its innovations are white,
-    `_process_noise.py`; `None` otherwise), `candidates` (the catalogue, ranked, best first, CONTRACTS section 3), `probes`
+    `_process_noise.py`; `None` otherwise), `candidates` (the catalogue, ranked, best first, the report format), `probes`
     (the same for the structure outside the catalogue, `_probes.py`), `unexplained` (what the
     first probe selected says: drivers and shrink; `None` when no probe is selected, or when
     it came first after a proxy of a disturbance was set aside),
@@ -91,7 +91,7 @@ class Diagnosis:
         return self.candidate(self.verdict) if self.verdict in named else None
 
     def to_json(self) -> dict:
-        """`diagnosis.json` (CONTRACTS section 3)."""
+        """`diagnosis.json` (the report format)."""
         return {
             "verdict": self.verdict,
             "effects": self.effects,

@@ -73,7 +73,7 @@ def gap_map(
     measured: Sequence[Mapping[str, np.ndarray]],
     axis: str,
 ) -> dict:
-    """The gap map of CONTRACTS' `localisation` from held-out residuals (full band, by load).
+    """The gap map of the diagnosis report's `localisation` from held-out residuals (full band, by load).
 
     - `by_output[load]`: `rms`, `unexplained_pct` (residual variance over the measured
       variance, i.e. 1 - R^2), and `share_pct` (its share of the sum over the axis's loads; 0

@@ -1,4 +1,4 @@
-"""Where the states came from: `reconstruction.json` (CONTRACTS section 5) beside the flights.
+"""Where the states came from: `reconstruction.json` (the raw-recording formats) beside the flights.
 
 A `random-disturbance` verdict says the held-out load residual is red and nothing measured
 predicts it. With states from the user's own filter, that is either a disturbance the vehicle
@@ -38,7 +38,8 @@ def _entries(folder: Path, cache: dict) -> dict[str, dict]:
         if not isinstance(flights, list) or not all(
                 isinstance(e, dict) and isinstance(e.get("flight"), str) for e in flights):
             raise InputError(f"{f}: expected {{\"flights\": [{{\"flight\": \"NAME.csv\", "
-                             "...}]} (CONTRACTS section 5); re-run fwid reconstruct or remove "
+                             "...}]} (see the guide's 'Formats and interfaces' page, "
+                             "docs/reference/formats.md); re-run fwid reconstruct or remove "
                              "the file")
         out = {Path(e["flight"]).name: e for e in flights}
     cache[folder] = out

@@ -22,6 +22,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .._errors import FitDivergedError
+from .._advice import advice
 from ._warnings import R_COND_MAX, model_error_signature, r_condition
 
 NOISE_MODELS = ("auto", "full", "diagonal")
@@ -63,8 +64,8 @@ def choose(full, diagonal, reason: str, flights) -> object:
                 "those of the full R")
         return dataclasses.replace(full, warnings=(*full.warnings, note))
     note = (f"{', '.join(flights)}: the {full.model.name} fit with a full R {reason}; the "
-            "estimates are those of a diagonal R (noise='diagonal'), which converged; "
-            "pass noise='full' to keep the full R")
+            "estimates are those of a diagonal R, which converged; "
+            f"{advice('full-noise')} keeps the full R")
     return dataclasses.replace(diagonal, warnings=(note, *diagonal.warnings))
 
 

@@ -17,6 +17,7 @@ from ..simulation._buckets import bucket_length, pad_experiment
 from ..simulation._experiment import Experiment, stack_experiments
 from ..simulation._simulate import simulate, simulate_sensitivities
 from . import _exported as exported
+from .._advice import advice
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
@@ -221,8 +222,8 @@ def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
     if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
         raise FitDivergedError(
             f"{', '.join(names)}: the {model.name} fit diverged (the simulation blows up for "
-            "every step tried from the start values); check the units and the trim, or give "
-            "start values (`start=model.with_params(...)`)"
+            "every step tried from the start values); check the units and the trim, or "
+            f"{advice('start')}"
         )
     check_information(out, free_names, names)
     result = FitResult(

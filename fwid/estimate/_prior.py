@@ -120,8 +120,7 @@ def prior_from(source, scale: float = 1.0) -> dict[str, tuple[float, float]]:
     **Arguments:**
     - `source`: a [`fwid.FitResult`][] (its estimates and their `std`), an identification
       (`fwid.identify`'s result: its one fit's, or with per-flight fits the mean over the
-      flights and their spread, as `report.json`), a `report.json` dict (CONTRACTS section
-      3: its top-level `"parameters"` `{name: {"value", "std"}}`), a prior dict
+      flights and their spread, as `report.json`), a `report.json` dict (the report format: its top-level `"parameters"` `{name: {"value", "std"}}`), a prior dict
       (`{name: (mean, std)}` or `{name: {"mean": .., "std": ..}}`), or the path of a JSON
       file holding a report or a prior dict. Parameters without a finite positive std (one
       that sat at an active bound, a single flight's spread) and per-flight terms (`bq@0`)

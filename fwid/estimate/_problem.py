@@ -20,6 +20,7 @@ from .._errors import ExcitationError
 from ..models._greybox import GreyBoxModel
 from ..simulation._checks import check_experiment
 from ..simulation._experiment import Experiment
+from .._advice import advice
 from ._prior import PriorBounds
 from ._start import least_squares_start
 
@@ -188,7 +189,7 @@ def check_information(result, names, flights):
         raise ExcitationError(
             f"{', '.join(flights)}: the data carry no information on parameter"
             f"{'s' if len(bad) > 1 else ''} {', '.join(bad)} (too little excitation); fix "
-            "them (`model.with_free(...)`) or add flights whose inputs excite them"
+            f"them ({advice('fix')}) or add flights whose inputs excite them"
         )
 
 

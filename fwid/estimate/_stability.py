@@ -19,6 +19,7 @@ import equinox as eqx
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
+from .._advice import advice
 
 #: Warn when the fastest unstable mode grows more than this factor over the record.
 GROWTH_MAX = 100.0
@@ -56,5 +57,5 @@ def instability_warning(model: GreyBoxModel, exps: Sequence, flights: Sequence[s
             "diverges from the data for all but the exact parameters and x0 and can settle "
             "on a wrong stable model; trust the estimates only if the residuals are small and "
             "white; otherwise fit shorter records, or use a method that keeps the simulation "
-            "near the data: fwid.fit(..., method='multiple-shooting'), or "
-            "method='filter-error' with process noise")
+            f"near the data: {advice('multiple-shooting')}, or {advice('filter-error')} "
+            "with process noise")

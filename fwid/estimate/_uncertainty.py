@@ -96,6 +96,22 @@ def covariance_held(M, middle=None, held=None):
     return jnp.where(both, cov, jnp.nan)
 
 
+#: A covariance whose correlation form leaves [-1, 1] by more than this is not positive
+#: semi-definite: it came from an information matrix that is singular to working precision.
+CORR_TOLERANCE = 1e-6
+
+
 def correlation(cov: Float[Array, "p p"]) -> Float[Array, "p p"]:
+    """The correlation matrix of a covariance, always within [-1, 1].
+
+    A covariance inverted from a numerically singular information matrix need not be
+    positive semi-definite, and its "correlations" then leave [-1, 1] (+7.2 and -5.0 on a
+    hostile flight): no correlation of the estimates exists there. Such a matrix gives NaN
+    throughout (the fit's warnings then name the parameters the information cannot
+    separate, `fwid.estimate._warnings`); otherwise rounding beyond +-1 is clipped. Rows of
+    parameters without a variance (NaN, e.g. held at an active bound) stay NaN and do not
+    count against the others."""
     d = jnp.sqrt(jnp.diag(cov))
-    return cov / jnp.outer(d, d)
+    c = cov / jnp.outer(d, d)
+    beyond = jnp.any(jnp.where(jnp.isfinite(c), jnp.abs(c), 0.0) > 1.0 + CORR_TOLERANCE)
+    return jnp.where(beyond, jnp.nan, jnp.clip(c, -1.0, 1.0))

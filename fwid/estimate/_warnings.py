@@ -19,6 +19,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._errors import FitWarning
+from .._advice import advice
 
 #: R whose correlation form (unit diagonal, so independent of the outputs' units) has a larger
 #: condition number is reported as ill-conditioned.
@@ -62,11 +63,30 @@ def collinear_pairs(M: Float[ArrayLike, "p p"], names: Sequence[str],
                     limit: float = CORR_MAX) -> list[tuple[str, str, float]]:
     """Pairs whose sensitivities are collinear beyond `limit`: the off-diagonal of the
     information matrix `M` scaled to a unit diagonal (where `M` is singular and the
-    correlation of the estimates does not exist)."""
+    correlation of the estimates does not exist). Within [-1, 1], as `M` is a Gram matrix."""
+    return correlated_pairs(np.clip(_unit_diagonal(M), -1.0, 1.0), names, limit)
+
+
+def _unit_diagonal(M: Float[ArrayLike, "p p"]) -> np.ndarray:
+    """`M` scaled to a unit diagonal, `D^-1/2 M D^-1/2` (0 where a diagonal entry is 0)."""
     M = np.asarray(M, dtype=float)
     d = np.sqrt(np.clip(np.diag(M), 0, None))
     with np.errstate(divide="ignore", invalid="ignore"):
-        return correlated_pairs(np.nan_to_num(M / np.outer(d, d)), names, limit)
+        return np.nan_to_num(M / np.outer(d, d))
+
+
+def unidentifiable(M: Float[ArrayLike, "p p"], names: Sequence[str],
+                   share: float = 0.1) -> list[str]:
+    """The parameters of the direction the information matrix `M` knows least: the
+    eigenvector of the smallest eigenvalue of `M` scaled to a unit diagonal, its entries of
+    squared size above `share` (largest first). Where `M` is singular, these are the
+    parameters whose combination the data cannot fix."""
+    S = _unit_diagonal(M)
+    if not np.all(np.isfinite(S)):
+        return []
+    vec = np.linalg.eigh((S + S.T) / 2)[1][:, 0]
+    order = np.argsort(-vec**2)
+    return [names[i] for i in order if vec[i] ** 2 > share]
 
 
 def model_error_signature(result) -> tuple[float, str, str, str, float] | None:
@@ -113,18 +133,18 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
             out.append(f"{who} did not converge: it stopped after {steps} Gauss-Newton "
                        f"step{'s' if steps != 1 else ''}{cap} because no shorter step "
                        "lowered the cost (a flat or ragged likelihood there); the estimates "
-                       "may be far from the optimum; try noise='diagonal' or better start "
-                       "values")
+                       f"may be far from the optimum; try {advice('diagonal-noise')} or "
+                       "better start values")
         else:
             out.append(f"{who} did not converge in {steps} Gauss-Newton "
                        f"step{'s' if steps != 1 else ''}{cap}: "
-                       "the estimates may be far from the optimum; raise max_steps, try "
-                       "noise='diagonal' or better start values")
+                       f"the estimates may be far from the optimum; {advice('max-steps')}, "
+                       f"try {advice('diagonal-noise')} or better start values")
     cond = r_condition(result.R)
     if cond > R_COND_MAX:
         out.append(f"{who}: the noise covariance R is ill-conditioned (condition number "
                    f"{cond:.3g} in correlation form): outputs are nearly linearly dependent "
-                   "or noise-free; try noise='diagonal'")
+                   f"or noise-free; try {advice('diagonal-noise')}")
     mark = model_error_signature(result)
     if mark is not None:
         colour, out_k, a, b, c = mark
@@ -133,20 +153,38 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
                    f"between outputs ({a} and {b}: "
                    f"{c:+.2f}): process noise or a missing effect, not measurement noise; "
                    "check the model for missing terms; with process noise (turbulence) "
-                   "output-error estimates are biased (fit with method='filter-error', a "
-                   "Kalman filter in the likelihood, whose innovations should be white); the "
+                   "output-error estimates are biased (fit with "
+                   f"{advice('filter-error')}, a Kalman filter in the likelihood, whose innovations should be white); the "
                    "standard deviations `std` allow for the colour, `std_cr` does not")
     pairs = correlated_pairs(result.corr, result.names)
     corr_free = np.asarray(result.corr)[np.ix_(free, free)]
     if not pairs and information is not None and not np.all(np.isfinite(corr_free)):
-        pairs = collinear_pairs(information, result.names)
-    if pairs:
+        out.append(_singular(who, information, result.names))
+    elif pairs:
         listed = ", ".join(f"{a} and {b} ({c:+.4f})" for a, b, c in pairs[:5])
         more = f" and {len(pairs) - 5} more" if len(pairs) > 5 else ""
         out.append(f"{who}: parameters nearly unidentifiable, correlated beyond {CORR_MAX}: "
-                   f"{listed}{more}; fix one of each pair (`model.with_free(...)`) or add "
+                   f"{listed}{more}; fix one of each pair ({advice('fix')}) or add "
                    "flights whose inputs separate them")
     return out
+
+
+def _singular(who: str, M, names: Sequence[str]) -> str:
+    """The warning of a fit whose information matrix `M` is singular to working precision
+    (no covariance, no correlation of the estimates): the pairs whose sensitivities are
+    collinear, else the parameters of the direction `M` does not know."""
+    pairs = collinear_pairs(M, names)
+    if pairs:
+        listed = ", ".join(f"{a} and {b} ({c:+.4f})" for a, b, c in pairs[:5])
+        more = f" and {len(pairs) - 5} more" if len(pairs) > 5 else ""
+        which = (f"the sensitivities of these pairs are collinear beyond {CORR_MAX}: "
+                 f"{listed}{more}")
+    else:
+        which = ("the data do not fix a combination of "
+                 + ", ".join(unidentifiable(M, names)[:6]))
+    return (f"{who}: the information matrix is singular (to working precision), so the "
+            f"estimates have no covariance and no correlation: {which}; fix some of them "
+            f"({advice('fix')}) or add flights whose inputs separate them")
 
 
 #: Set (in this thread or task only) by `quiet_fits`.

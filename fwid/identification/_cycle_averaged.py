@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._errors import InputError
+from .._errors import FitWarning, InputError
 from ..data._flight import Flight
 from ..estimate._each import fit_each
 from ..estimate._fit import fit
@@ -20,6 +20,7 @@ from ..models._greybox import GreyBoxModel
 from ..simulation._averaged import averaged
 from ..validate._modes import eigenvalues, modes
 from ..validate._state_space import StateSpace, state_space
+from ._closed_loop import ClosedLoop, closed_loop_test, closed_loop_warning
 from ._flight_fit import FlightFit, evaluate
 
 MODELS = {"lon": longitudinal, "lat": lateral}
@@ -38,6 +39,9 @@ class Identification:
     - `estimation`, `validation`: a [`fwid.FlightFit`][] per estimation and held-out flight.
     - `joint`: whether one parameter set was fitted to all flights.
     - `consts`: the constants the modes are computed with (vehicle and trim).
+    - `closed_loop`: the closed-loop test of each estimation flight's control
+      ([`ClosedLoop`][], `None` where it could not run).
+    - `warnings`: what the fits' own warnings do not say about the flights (a closed loop).
 
     `fit` is the first (or joint) fit, `eigenvalues` and `modes` those of `model`, and
     `state_space()` the linear system at the trim ([`fwid.StateSpace`][]).
@@ -50,6 +54,8 @@ class Identification:
     validation: list[FlightFit] = field(default_factory=list)
     joint: bool = False
     consts: dict[str, float] = field(default_factory=dict)
+    closed_loop: list[ClosedLoop | None] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def fit(self) -> FitResult:
@@ -126,6 +132,7 @@ def identify(
     progress: bool = False,
     prior=None,
     bounds=None,
+    method: str = "output-error",
 ) -> Identification:
     """Identify the cycle-averaged model from flights, as in the paper's Section IV.
 
@@ -149,6 +156,9 @@ def identify(
     - `progress`: print a line per stage.
     - `prior`, `bounds`: a Gaussian prior on parameters and bounds, passed to
       [`fwid.fit`][] (with per-flight fits, every flight's fit gets them).
+    - `method`: the estimator, passed to [`fwid.fit`][]: `"output-error"` (the paper's),
+      `"multiple-shooting"` (an unstable vehicle) or `"filter-error"` (process noise,
+      closed-loop flights).
 
     **Returns:** an [`fwid.Identification`][].
     """
@@ -159,18 +169,23 @@ def identify(
     if prior is not None or bounds is not None:  # bad names or values: say so now
         prior_bounds(model, list(model.free), prior, bounds)
     _say_missing_forces(model, list(flights) + list(validate))
+    loops = [closed_loop_test(f, model.inputs[0], model.states, cutoff)
+             for f in flights] if model.inputs else []
+    notes = [w for w in [closed_loop_warning(loops, model.name)] if w is not None]
+    for w in notes:
+        warnings.warn(w, FitWarning, stacklevel=2)
     exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]
     names = [f.name for f in flights]
     if joint or len(exps) == 1:
         fits = [fit(model, exps, names=names, start=start, progress=progress, prior=prior,
-                    bounds=bounds)]
+                    bounds=bounds, method=method)]
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
             estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
     else:
         fits = fit_each(model, exps, names=names, start=start, progress=progress, prior=prior,
-                        bounds=bounds)
+                        bounds=bounds, method=method)
         summary = _mean_model(model, fits)
         estimation = [evaluate(f.model, e, n, refit_local=False)
                       for f, e, n in zip(fits, exps, names)]
@@ -180,4 +195,5 @@ def identify(
     ]
     consts = {k: float(v) for k, v in exps[0].consts.items()}
     return Identification(model=summary, flights=names, fits=fits, estimation=estimation,
-                          validation=validation, joint=joint, consts=consts)
+                          validation=validation, joint=joint, consts=consts,
+                          closed_loop=loops, warnings=notes)

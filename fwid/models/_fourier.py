@@ -9,7 +9,7 @@ constant `f` and stays in step with the wing beat when `f` drifts.
 
 The model is a static input-output [`fwid.GreyBoxModel`][] (no states): input `phase`,
 outputs the force and moment channels, parameters `a<o><n>` (sine) and `b<o><n>` (cosine) for
-output `o` (lower case) and harmonic `n` (CONTRACTS section 3: `ax1 bx1 ... am3 bm3`).
+output `o` (lower case) and harmonic `n` (the report format: `ax1 bx1 ... am3 bm3`).
 [`fwid.fit`][] estimates it by output-error ML (no integration needed), started from
 [`fwid.models.fourier_least_squares`][].
 """

@@ -1,4 +1,4 @@
-"""What the pipelines found, for people and for programs (CONTRACTS section 3).
+"""What the pipelines found, for people and for programs (the report format).
 
 - JSON reports (`report.json`, `diagnosis.json`), written whole or not at all:
   [`fwid.write_json`][] (`_json.py`); [`fwid.identification_report`][] (`_identification.py`,
@@ -26,6 +26,9 @@ EXPORTS = {
     ),
     "_diagnosis": (
         "diagnosis_summary", "plot_gap_map", "plot_gap_sim", "write_diagnosis",
+    ),
+    "_failure": (
+        "failure_reason",
     ),
     "_figures": (
         "plot_flight_fit", "plot_poles",

@@ -1,4 +1,4 @@
-"""The files of `fwid design` (CONTRACTS section 6): `input.csv`, `design.json` and the figure
+"""The files of `fwid design` (the test-input format): `input.csv`, `design.json` and the figure
 of the input, the predicted response and the predicted standard deviations side by side."""
 
 from __future__ import annotations

@@ -13,6 +13,8 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from ._numbers import compact
+
 _DEG = {"q", "p", "r", "theta", "phi", "psi", "alpha", "de", "dr"}
 _UNITS = {"q": "deg/s", "p": "deg/s", "r": "deg/s", "theta": "deg", "phi": "deg",
           "u": "m/s", "w": "m/s", "v": "m/s", "X": "N", "Y": "N", "Z": "N",
@@ -83,7 +85,7 @@ def plot_flight_fit(flight_fit, *, path: str | Path | None = None, title: str = 
             res.set_ylabel("resid.", fontsize=7)
             m = flight_fit.metrics.get(k)
             if m:
-                ax.text(0.99, 0.95, f"corr {m['corr']:.2f}  R2 {m['r2']:.2f}", ha="right",
+                ax.text(0.99, 0.95, f"corr {compact(m['corr'])}  R2 {compact(m['r2'])}", ha="right",
                         va="top", transform=ax.transAxes, fontsize=7)
             last = res
         if last is not None:  # time ticks on every column's last visible panel

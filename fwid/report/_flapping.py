@@ -1,4 +1,4 @@
-"""The `report.json` of `fwid identify --model flap|combined` (CONTRACTS section 3): the
+"""The `report.json` of `fwid identify --model flap|combined` (the report format): the
 Fourier model (Table 7, Table 8) and the combined model (Sections V-VI)."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from ._identification import (
 
 
 def flapping_report(ident: FlappingIdentification, steady=None) -> dict:
-    """The `report.json` of `fwid identify --model flap` (CONTRACTS section 3), as a dict.
+    """The `report.json` of `fwid identify --model flap` (the report format), as a dict.
 
     `parameters` holds Table 7 (`value`, `std`, ...), `metrics` Table 8 per output (pooled over
     flights); `eigenvalues` is empty (a Fourier series has no dynamics). Extra keys:
@@ -79,7 +79,7 @@ def flapping_report(ident: FlappingIdentification, steady=None) -> dict:
 
 
 def combined_report(ident: CombinedIdentification) -> dict:
-    """The `report.json` of `fwid identify --model combined` (CONTRACTS section 3).
+    """The `report.json` of `fwid identify --model combined` (the report format).
 
     `parameters` holds both sub-models' parameters, `eigenvalues` those of the cycle-averaged
     part, `metrics` the full simulation's match per state and force. The sub-models' own

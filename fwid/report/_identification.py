@@ -1,4 +1,4 @@
-"""The `report.json` of `fwid identify --model lon|lat` (CONTRACTS section 3) and the blocks
+"""The `report.json` of `fwid identify --model lon|lat` (the report format) and the blocks
 every pipeline's report shares: parameters, fit information, pooled metrics, mode spread."""
 
 from __future__ import annotations
@@ -143,7 +143,7 @@ def add_validation(report: dict, validation) -> dict:
 
 
 def identification_report(ident) -> dict:
-    """The `report.json` of `fwid identify` (CONTRACTS section 3), as a dict.
+    """The `report.json` of `fwid identify` (the report format), as a dict.
 
     **Arguments:**
 
@@ -166,7 +166,9 @@ def identification_report(ident) -> dict:
         "trim_and_vehicle": ident.consts,
         "state_space": ident.state_space().to_json(),
         "units": "SI: rad, rad/s, m/s, N, N m; rms in the output's unit",
-        "warnings": fit_warnings_of(ident.fits),
+        "warnings": [*getattr(ident, "warnings", ()), *fit_warnings_of(ident.fits)],
+        "closed_loop": {c.flight: c.to_json()
+                        for c in getattr(ident, "closed_loop", ()) if c is not None},
     }
     add_validation(report, ident.validation)
     if len(ident.fits) == 1:

@@ -1,4 +1,4 @@
-"""Machine-readable reports (CONTRACTS section 3), written whole or not at all."""
+"""Machine-readable reports (the report format), written whole or not at all."""
 
 from __future__ import annotations
 
@@ -68,7 +68,7 @@ def write_json(path: str | Path, obj) -> Path:
 
     **Returns:** the path written.
     """
-    return write_text(path, json.dumps(_clean(obj), indent=2) + "\n")
+    return write_text(path, json.dumps(_clean(obj), indent=2, allow_nan=False) + "\n")
 
 
 def parameters_csv(parameters: dict) -> str:

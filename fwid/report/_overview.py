@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ._figures import _UNITS, _display, _scaled_input
+from ._numbers import compact
 
 
 def mean_r2(flight_fit) -> float:
@@ -58,7 +59,7 @@ def plot_fits_overview(fits: Sequence, *, path: str | Path | None = None, title:
                 unit = _UNITS.get(k, "")
                 ax.set_title(f"\u0394{k} [{unit}]" if unit else f"\u0394{k}", fontsize=8)
         label = " ".join(s for s in (rank, part_of.get(id(ff), "")) if s)
-        axes[i, 0].set_ylabel(f"{ff.name}\n{label}\nR2 {mean_r2(ff):.2f}".replace("\n\n", "\n"),
+        axes[i, 0].set_ylabel(f"{ff.name}\n{label}\nR2 {compact(mean_r2(ff))}".replace("\n\n", "\n"),
                               fontsize=6)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]", fontsize=7)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._numbers import fixed, score
+
 
 #: The SI unit of each signal, as in report.json.
 SI_UNITS = {"q": "rad/s", "p": "rad/s", "r": "rad/s", "theta": "rad", "phi": "rad", "psi": "rad",
@@ -30,7 +32,8 @@ def parameter_table(params: dict, *, columns: int = 3) -> str:
                 p = params[k]
                 std = p.get("std")
                 rel = 100 * abs(std / p["value"]) if std is not None and p["value"] else float("nan")
-                cells.append(f"{k:<8}{p['value']:>11.3e}{(std or float('nan')):>10.2e}{rel:>9.2f}")
+                std = float("nan") if std is None else std
+                cells.append(f"{k:<8}{p['value']:>11.3e}{std:>10.2e}{fixed(rel, 9)}")
             else:
                 cells.append(" " * 38)
         lines.append("  ".join(cells).rstrip())
@@ -39,12 +42,13 @@ def parameter_table(params: dict, *, columns: int = 3) -> str:
 
 def metrics_table(metrics: dict, title: str = "") -> str:
     """Table 2's layout: output correlation, R^2, RMS (in the output's SI unit) and RMS as %
-    of the output's measured range, per output."""
+    of the output's measured range, per output; every number in a bounded width (an R2 far
+    below zero as `<-1e3`, see `_numbers.py`)."""
     lines = [title] if title else []
     lines.append(f"{'output':<8}{'corr':>7}{'R2':>8}{'RMS':>11} {'unit':<6}{'% range':>8}")
     for k, m in metrics.items():
-        lines.append(f"{k:<8}{m['corr']:>7.2f}{m['r2']:>8.2f}{m['rms']:>11.3e} "
-                     f"{SI_UNITS.get(k, ''):<6}{m['rms_pct']:>8.2f}")
+        lines.append(f"{k:<8}{score(m['corr'], 7)}{score(m['r2'], 8)}{m['rms']:>11.3e} "
+                     f"{SI_UNITS.get(k, ''):<6}{fixed(m['rms_pct'], 8)}")
     return "\n".join(lines)
 
 
@@ -53,11 +57,13 @@ def modes_table(modes: list[dict]) -> str:
     lines = [f"{'eigenvalue':<24}{'mode':<12}{'wn [rad/s]':>11}{'zeta':>7}{'tau [s]':>9}"]
     for m in modes:
         re, im = m["eigenvalue"]
-        ev = f"{re:.4f} +/- {im:.4f}i" if im else f"{re:.4f}"
+        re, im = fixed(re, 11, 4).strip(), fixed(im, 11, 4).strip()
+        ev = f"{re} +/- {im}i" if m["kind"] == "oscillatory" else re
         if m["kind"] == "oscillatory":
-            lines.append(f"{ev:<24}{'oscillatory':<12}{m['wn']:>11.3f}{m['zeta']:>7.3f}{'':>9}")
+            lines.append(f"{ev:<24}{'oscillatory':<12}{fixed(m['wn'], 11, 3)}"
+                         f"{fixed(m['zeta'], 7, 3)}{'':>9}")
         else:
-            lines.append(f"{ev:<24}{'aperiodic':<12}{'':>11}{'':>7}{m['tau']:>9.3f}")
+            lines.append(f"{ev:<24}{'aperiodic':<12}{'':>11}{'':>7}{fixed(m['tau'], 9, 3)}")
     return "\n".join(lines)
 
 

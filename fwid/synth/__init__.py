@@ -4,13 +4,13 @@ An independent numpy implementation of the paper's combined model (Eqs. 7-9 with
 cycle-averaged aerodynamics Eqs. 1-6 of Tables 1 and 4, and the flapping Fourier series
 Eq. 12 of Table 7, superposed as in Eqs. 13-15), with realistic measurement: rippling
 control surfaces, sensor noise, and loads reconstructed from the measured motion. Flights are
-written as in CONTRACTS section 1; `effect` injects an unmodelled effect (section 4) in one of
+written as in the flight-data format; `effect` injects an unmodelled effect (the effect names) in one of
 a family of forms (`form`, `FORMS`; equations in `fwid.synth._effects`), or two at once;
 `effect_noise_ratio` measures how strong it is against the noise on its loads, and
 `random_vehicle` draws a stable DelFly with every derivative and Fourier coefficient within
 +-30 % of the paper's.
 
-Raw recordings (CONTRACTS section 5): `_sixdof` flies the same vehicle and loads with the
+Raw recordings (the raw-recording formats): `_sixdof` flies the same vehicle and loads with the
 full nonlinear rigid-body equations (JAX, diffrax); `_raw` records such a flight as a lab
 would (tracking take with pose noise and dropouts, autopilot log on its own clock with a
 biased gyro); `_rawfiles` writes it as a fwid raw CSV or a Motive export plus the truth.

@@ -58,7 +58,7 @@ def _fourier_names(axes: str) -> tuple[str, ...]:
 FLAP_LON_PARAMS = _fourier_names("xzm")
 #: Lateral flapping Fourier coefficients (not in the paper; invented, see module docstring).
 FLAP_LAT_PARAMS = _fourier_names("yln")
-#: Every aerodynamic parameter of the truth model, by its CONTRACTS name.
+#: Every aerodynamic parameter of the truth model, by its report name.
 ALL_PARAMS = LON_PARAMS + LAT_PARAMS + FLAP_LON_PARAMS + FLAP_LAT_PARAMS
 
 #: Force/moment order used throughout `fwid.synth`.
@@ -162,7 +162,7 @@ class DelFly:
         return {k: float(getattr(self, k)) for k in names}
 
     def vehicle(self) -> dict[str, float]:
-        """Mass and inertia as in `vehicle.json` (CONTRACTS section 1)."""
+        """Mass and inertia as in `vehicle.json` (the flight-data format)."""
         return {k: float(getattr(self, k)) for k in ("mass", "Ix", "Iy", "Iz", "Ixz", "g")}
 
     def trim(self) -> dict[str, float]:

@@ -10,7 +10,7 @@ flight's time history (open loop: exact for effects that do not depend on the st
 for the small motions of the default inputs otherwise).
 
 Clocks: the tracking clock is the simulation's (`t = 0` at the first frame of the take); the
-autopilot's clock is `t_onboard = t_tracking - clock_offset_s` (CONTRACTS section 5). The log
+autopilot's clock is `t_onboard = t_tracking - clock_offset_s` (the raw-recording formats). The log
 starts `lead` seconds after the take and ends `tail` seconds after it, so both sources
 overlap over all but the take's first `lead` seconds.
 """

@@ -1,4 +1,4 @@
-"""Write raw recordings (`simulate_raw`) as files (CONTRACTS section 5): the fwid raw CSV, or
+"""Write raw recordings (`simulate_raw`) as files (the raw-recording formats): the fwid raw CSV, or
 an OptiTrack Motive CSV export with its autopilot log; and beside them the truth
 (`truth/NAME.csv`, `truth/vehicle.json`, `truth/NAME.json`)."""
 

@@ -56,7 +56,7 @@ from ._effects import Effect
 from ._inputs import DEFAULT_UNIT, N_UNITS, make_input
 from ._reconstruct import LOAD_CUTOFF, reconstruct_loads
 
-#: Columns of a flight CSV, in file order (CONTRACTS section 1).
+#: Columns of a flight CSV, in file order (the flight-data format).
 COLUMNS = (
     "t", "q", "u", "w", "theta", "p", "r", "v", "phi", "psi",
     "de", "dr", "f", "X", "Y", "Z", "L", "M", "N",
@@ -280,7 +280,7 @@ def simulate_flight(
     - `noise`: scale of `NOISE` (0: noise-free), or a dict of per-channel sigmas.
     - `flapping`: add the flapping loads (Eq. 12). `ripple`: measured surfaces ripple.
     - `drift`: flapping frequency ramps `DRIFT` (11.5 -> 13.2 Hz) instead of 12.5 Hz.
-    - `effect`, `strength`, `form`: an unmodelled effect (`_effects`, CONTRACTS section 4)
+    - `effect`, `strength`, `form`: an unmodelled effect (`_effects`, the effect names)
       in one of its forms (`None`: the default form), or two at once (`"a+b"` or a tuple,
       with a tuple of forms), or an `Effect`.
     - `substeps`: RK4 steps per sample (1: exactly the estimator's scheme).

@@ -1,4 +1,4 @@
-"""Write simulated flights to disk in the CONTRACTS section 1 format."""
+"""Write simulated flights to disk in the flight-data format."""
 
 from __future__ import annotations
 

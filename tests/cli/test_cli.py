@@ -298,14 +298,18 @@ def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatc
 
     pipeline = importlib.import_module("fwid.identification._cycle_averaged")
     monkeypatch.setattr(pipeline, "fit", functools.partial(pipeline.fit, max_steps=1))
-    with pytest.warns(UserWarning, match="did not converge"):
-        rc = main(["identify", str(flights / "lon_0.csv"), "--model", "lon",
-                   "--out", str(tmp_path), "--quiet"])
+    rc = main(["identify", str(flights / "lon_0.csv"), "--model", "lon",
+               "--out", str(tmp_path), "--quiet"])
     assert rc == 1
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
-    assert len(err) == 1 and "no fit converged (flights: lon_0.csv)" in err[0]
-    assert "WARNING: lon_0.csv: the lon fit did not converge in 1 Gauss-Newton step" in captured.out
+    assert len(err) == 1 and "no fit converged (flights: lon_0.csv): " in err[0], err
+    assert "stalled" in err[0]
+    note = "WARNING: lon_0.csv: the lon fit did not converge in 1 Gauss-Newton step"
+    assert captured.out.count(note) == 1  # once, one line, no source location
+    assert "UserWarning" not in captured.out + captured.err
+    # advice in the command line's terms: no option for the noise model, so the Python call
+    assert "try the Python call fwid.fit(..., noise='diagonal')" in captured.out
     report = json.loads((tmp_path / "report.json").read_text())  # still written
     assert report["fit"]["converged"] is False
     assert any("did not converge" in w for w in report["warnings"])

@@ -1,5 +1,6 @@
 """No silent failure: a fit that should not be trusted says so with a FitWarning."""
 
+import re
 import warnings
 
 import jax.numpy as jnp
@@ -72,10 +73,45 @@ def test_a_good_fit_has_no_warnings():
 
 
 def test_parameters_entering_as_a_sum_are_named():
+    """Only their sum is identifiable: the information matrix is singular, the estimates have
+    no correlation, and the warning names the pair from the collinear sensitivities."""
     model = _sum_lag()
     r, caught = _fit(model, _data(model.with_params(a1=1.2, a2=0.8)), start="model")
-    found = [m for m in caught if "nearly unidentifiable" in m]
-    assert found and "a1 and a2" in found[0] and "correlated beyond 0.98" in found[0]
+    found = [m for m in caught if "information matrix is singular" in m]
+    assert found and "a1 and a2 (+1.0000)" in found[0] and "collinear beyond 0.98" in found[0]
+    assert "model.with_free(...)" in found[0]
+
+
+def _numbers(text):
+    return [float(x) for x in re.findall(r"[+-]\d+\.\d+", text)]
+
+
+def test_an_indefinite_covariance_has_no_correlation_beyond_one():
+    """A covariance inverted from a numerically singular information matrix need not be
+    positive semi-definite; its "correlations" (here +7.2) are no correlations: NaN, and the
+    warning names the pairs the information cannot separate, every number within [-1, 1]."""
+    from fwid.estimate import correlation
+    from fwid.estimate._warnings import unidentifiable
+
+    cov = jnp.array([[1.0, 7.2, 0.0], [7.2, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    assert np.all(np.isnan(np.asarray(correlation(cov))))
+    good = jnp.array([[4.0, 1.0 + 1e-12], [1.0 + 1e-12, 0.25]])  # +1 up to rounding: clipped
+    assert float(jnp.max(correlation(good))) == 1.0
+    model = _simple()
+    r, _ = _fit(model, _data(model.with_params(a=3.0, b=2.0)), start="model")
+    bad = r.__class__(**{**{k: getattr(r, k) for k in r.__dataclass_fields__},
+                         "corr": correlation(jnp.array([[1.0, 7.2], [7.2, 1.0]])),
+                         "warnings": ()})
+    M = np.array([[1.0, 1.0 - 1e-13], [1.0 - 1e-13, 1.0]])
+    found = [m for m in fit_warnings(bad, ["f1"], information=M) if "singular" in m]
+    assert found and "a and b" in found[0], found
+    assert all(abs(x) <= 1 for x in _numbers(found[0]))
+    # x, y and their sum: no pair collinear, the three together singular
+    J = np.random.default_rng(0).standard_normal((50, 3))
+    J = np.column_stack([J[:, 0], J[:, 1], J[:, 0] + J[:, 1], J[:, 2]])
+    assert sorted(unidentifiable(J.T @ J, ["x", "y", "s", "z"])) == ["s", "x", "y"]
+    singular = fit_warnings(bad, ["f1"], information=J[:, :2].T @ J[:, :2] * [[1, 0], [0, 0]])
+    assert any("singular" in m for m in singular)
 
 
 def test_nearly_correlated_pair_is_named_with_its_correlation():

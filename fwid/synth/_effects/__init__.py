@@ -1,4 +1,4 @@
-"""Unmodelled effects the simulator can inject (CONTRACTS section 4), for gap diagnosis, each
+"""Unmodelled effects the simulator can inject (the effect names), for gap diagnosis, each
 in a family of forms.
 
 `Effect(name, strength, form)`: `name` one of `EFFECTS` (the catalogue) or
@@ -52,7 +52,7 @@ import numpy as np
 from . import _actuator, _aero, _coupling, _flapping, _frequency, _gusts, _outside
 from ._form import Active, Form
 
-#: Effect names (CONTRACTS section 4).
+#: Effect names, spelled as reports and `--effect` spell them.
 EFFECTS = ("none", "flap-coupling", "nonlinear-aero", "lon-lat-coupling", "actuator-dynamics",
            "unsteady-aero", "time-offset", "flap-frequency")
 #: Effects the simulator can inject that are not in the catalogue (see the module docstring).
