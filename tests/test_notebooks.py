@@ -86,3 +86,18 @@ def test_reconstruction_notebook_runs(tmp_path):
     assert text.count("cycle-averaged error") == 7
     assert "eigenvalue: true -1.35" in text
     assert len(images) >= 1  # the reconstruction figure
+
+
+_REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata"
+
+
+@pytest.mark.skipif(not (_REAL / "fd_model_tuning_level_flight_1.csv.gz").exists(),
+                    reason=f"real recordings not found beside the repository ({_REAL})")
+def test_real_flapper_notebook_runs(tmp_path):
+    outputs, text, images = _execute("06_real_flapper.ipynb", tmp_path)
+    assert text.count("convention used: z-up frame, pitch reversed, sensors FLU") == 2
+    for line in text.splitlines():
+        if ": correlation x " in line:  # the cycle-averaged accelerometer follows the pose
+            assert float(line.split("correlation x ")[1].split(",")[0]) > 0.85, line
+    assert "closed loop" in text and "filter-error" in text
+    assert len(images) >= 1

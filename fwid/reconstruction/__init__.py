@@ -1,11 +1,17 @@
-"""From what a lab records to flight data (CONTRACTS section 5): raw tracking takes and
+"""From what a lab records to flight data (the guide's page on raw recordings): raw tracking takes and
 autopilot logs to the section-1 flights every other stage reads.
 
 - Reading (numpy, no JAX): the form is told by the first line (`_read.py`, [`fwid.read_raw`][]):
   the fwid raw CSV (`_fwid_raw.py`) and the OptiTrack Motive CSV export with its autopilot
   log `NAME.onboard.csv` (`_motive.py`); the checks they share (uniform time base, unit
   quaternions, dropouts no longer than `max_dropout`) and the `RawTake` (`_raw.py`);
-  rotations, quaternion sign continuity, y-up / z-up to north-east-down (`_rotations.py`).
+  rotations, quaternion sign continuity, y-up / z-up to north-east-down (`_rotations.py`);
+  Motive's time base from its frame numbers and its length unit when unsaid (`_frames.py`,
+  `_units.py`); held poses, orientation flips and position jumps dropped (`_glitches.py`).
+- A lab's own files through a recording map (`_map.py`, [`fwid.read_map`][]; read by
+  `_mapped.py`), time stamps made uniform (`_timebase.py`), the pose's convention checked
+  against the onboard accelerometer and gyro (`_imu.py`), the flapping frequency of a
+  tracking-only take from the pose's ripple (`_ripple.py`).
 - Smoothing (JAX): a linear Kalman filter and Rauch-Tung-Striebel smoother with
   `lax.scan` (`_kalman.py`) on a kinematic model per axis, white jerk plus the flapping
   harmonics 1-3 with wandering coefficients and a gyro bias (`_model.py`), noise levels by
@@ -22,7 +28,7 @@ autopilot logs to the section-1 flights every other stage reads.
 
 - `flight`, `source`, `clock_offset_s` (`t_tracking = t_onboard + clock_offset_s`; 0 when one
   file holds both), `dropouts` (`[start, end]` times of the samples lost), `warnings`
-  (CONTRACTS section 5);
+  (the guide's page on raw recordings);
 - `rate_hz`, `duration_s`: the flight's time base;
 - `clock`: the offset's quality, or null without a log: `offset_s`, `std_s` (its standard
   error from the curvature of the fit), `corr` (correlation of the aligned gyro and
@@ -36,7 +42,10 @@ autopilot logs to the section-1 flights every other stage reads.
   axis), `gyro_rms_rad_s` (gyro less bias minus smoothed rates, per axis, or null); about the
   noise levels when the smoother and the data agree;
 - `specific_force_body_mean`: the mean aerodynamic force per unit mass in body axes (m/s^2),
-  what the frame check judges.
+  what the frame check judges;
+- `imu` (when the take has an accelerometer or gyro): per sensor (`acc`, `gyro`) and body axis
+  (`x y z`) the `corr` and `rms` of the cycle-averaged sensor and reconstructed signals, and
+  `frame`: the convention used.
 """
 
 from ._pipeline import (

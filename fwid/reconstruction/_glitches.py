@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import FlightDataError
+from .._words import count
 
 #: The physical floor of the bound (rad/s): no flying vehicle turns faster (1000 deg/s).
 MAX_TURN_RATE = np.deg2rad(1000.0)
@@ -122,7 +123,8 @@ def drop_glitches(t: np.ndarray, quat: np.ndarray, tracked: np.ndarray,
         same = held_frames(quat, pos, tracked)
         if same.any():
             tracked &= ~same
-            warnings.append(f"{int(same.sum())} frames repeat the previous frame's pose exactly "
+            verb = "repeats" if int(same.sum()) == 1 else "repeat"
+            warnings.append(f"{count(int(same.sum()), 'frame')} {verb} the previous frame's pose exactly "
                             "(a value the tracking held, not a measurement): dropped as "
                             f"dropouts, at t = {_times(t, np.flatnonzero(same))}")
     idx = np.flatnonzero(tracked)
@@ -164,11 +166,12 @@ def drop_glitches(t: np.ndarray, quat: np.ndarray, tracked: np.ndarray,
             "(markers placed asymmetrically), or cut the take to where it is tracked well")
     tracked[rejected] = False
     if flips.size:
-        warnings.append(f"{flips.size} orientation glitches (flips) dropped, at t = "
+        warnings.append(f"{count(flips.size, 'orientation glitch', 'orientation glitches')} "
+                        "(flips) dropped, at t = "
                         f"{_times(t, flips)} (a turn faster than {np.rad2deg(bound_q / dt):.4g} "
                         "deg/s within one frame)")
     if jumps.size:
-        warnings.append(f"{jumps.size} position jumps (markers swapped) dropped, at t = "
+        warnings.append(f"{count(jumps.size, 'position jump')} (markers swapped) dropped, at t = "
                         f"{_times(t, jumps)} (faster than {bound_p / dt:.3g} m/s within one "
                         "frame)")
     return tracked, warnings

@@ -151,8 +151,18 @@ def _number(path, key, v, positive=False) -> float:
 
 
 def read_map(path) -> RecordingMap:
-    """Read and check a recording map (module docstring); an unknown key, unit or frame,
-    or a malformed entry, is an `InputError` naming the map and the key."""
+    """Read and check a recording map: a TOML file naming a lab's columns, units and axes.
+
+    The keys are those of the guide's page on your lab's recordings: `[time]`, `[tracking]`,
+    `[onboard]` and `[inputs]`.
+
+    **Arguments:**
+    - `path`: the map's TOML file.
+
+    **Returns:** a `fwid.reconstruction.RecordingMap`, every unit turned into its factor to SI
+    units. An unknown section, key, unit or frame, or a malformed entry, is a
+    [`fwid.InputError`][] naming the map and the key.
+    """
     path = Path(path)
     if not path.is_file():
         raise InputError(f"--map {path}: no such file")

@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._errors import FlightDataError, FwidError, InputError
+from .._words import count
 from ..data._checks import check_flight
 from ..data._sidefiles import VEHICLE_FILE, read_vehicle
 from ._attitude import smooth_attitude
@@ -170,7 +171,7 @@ def _vehicle(path: Path, vehicle):
     v = path.parent / VEHICLE_FILE
     if not v.is_file():
         raise FlightDataError(f"{path}: no {VEHICLE_FILE} beside the take; the loads need the "
-                              "vehicle's mass and inertia (CONTRACTS section 1)")
+                              "vehicle's mass and inertia (see the guide's page on flight files)")
     return read_vehicle(v), str(v)
 
 
@@ -200,7 +201,7 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
                 min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None,
                 processes: int | None = None, pool=None, recording_map=None,
                 strict_frame: bool = False) -> Reconstruction:
-    """Raw takes to section-1 flights (CONTRACTS section 5), smoothed and with their loads.
+    """Raw takes to section-1 flights (the guide's page on raw recordings), smoothed and with their loads.
 
     The states come from the smoother, the loads from the full nonlinear rigid-body
     equations; a take that fails is reported and the others go on.
@@ -351,7 +352,7 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             e = flights[i].entry
             off = f", clock offset {e['clock_offset_s']:.4f} s" if clock is not None else ""
             say(f"{take.name}: {len(flights[i].columns['t'])} samples at {e['rate_hz']:.4g} Hz"
-                f"{off}, {len(e['dropouts'])} dropouts")
+                f"{off}, {count(len(e['dropouts']), 'dropout')}")
         except FwidError as e:
             failures[str(f)] = str(e)
             say(f"{f.name}: failed (below)")

@@ -36,8 +36,10 @@ def raw_files(paths) -> list[Path]:
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
              onboard=None, max_dropout: float = MAX_DROPOUT, recording_map=None,
              strict_frame: bool = False) -> RawTake:
-    """Read one raw take (see the guide's pages on raw recordings and on your lab's
-    recordings) into north-east-down.
+    """Read one raw take (a fwid raw CSV, a Motive export, or a lab's file through a map).
+
+    The take comes back in north-east-down, body axes forward-right-down (the guide's pages
+    on raw recordings and on your lab's recordings).
 
     **Arguments:**
     - `path`: a fwid raw CSV or a Motive CSV export (its first line starts `Format Version`);

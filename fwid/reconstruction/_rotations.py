@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Tracking frame -> north-east-down, for the world and the body axes alike (CONTRACTS
-#: section 5): y-up (Motive: X north, Y up, Z east) and z-up (Vicon: X north, Y west, Z up).
+#: Tracking frame -> north-east-down, for the world and the body axes alike (the guide
+#: on raw recordings): y-up (Motive: X north, Y up, Z east) and z-up (Vicon: X north, Y west, Z up).
 FRAMES = {
     "ned": np.eye(3),
     "y-up": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]),

@@ -57,7 +57,7 @@ def test_hundreds_of_flips_are_found_exactly_and_named():
     assert warnings[0].startswith(f"{rows.size} orientation glitches (flips) dropped, at t = ")
     assert warnings[0].startswith(f"{rows.size} orientation glitches (flips) dropped, at t = "
                                   f"{t[rows[0]]:.4g}, ")
-    assert warnings[1].startswith("1 position jumps (markers swapped) dropped, at t = 33.33 s")
+    assert warnings[1].startswith("1 position jump (markers swapped) dropped, at t = 33.33 s")
 
 
 def test_a_take_that_starts_on_a_flip_is_followed_from_its_longest_stretch():
