@@ -48,6 +48,9 @@ _DEBUG = False  # print every accepted step (for development)
 #: Default segment length, in sample intervals (0.5 s at 20 Hz): short enough that an unstable
 #: mode grows little within a segment, long enough that the segment states stay few.
 SEGMENT_SAMPLES = 10
+#: ... and in seconds: a segment spans at least this long however fast the sampling (at
+#: 100 Hz, 50 samples rather than 10: five times fewer segment states to estimate).
+SEGMENT_SECONDS = 0.5
 
 
 class _Segments(eqx.Module):
@@ -228,13 +231,16 @@ def fit_shooting(
     segments: int | None = None,
 ):
     """[`fwid.fit`][] with `method="multiple-shooting"`: output error over `segments` segments
-    per experiment (default: segments of [`SEGMENT_SAMPLES`][] samples) joined by continuity
+    per experiment (default: segments of [`SEGMENT_SAMPLES`][] samples and at least
+    [`SEGMENT_SECONDS`][]) joined by continuity
     (see the module docstring). The model's `local`
     parameters are shared between the experiments. Returns a [`fwid.FitResult`][] whose
     `std` and `std_cr` are both the constrained Cramer-Rao bounds."""
     check_noise(noise)
     if segments is None:
-        segments = max(1, -(-(max(e.n for e in exps) - 1) // SEGMENT_SAMPLES))
+        dt = min(float(e.dt) for e in exps)
+        length = max(SEGMENT_SAMPLES, int(round(SEGMENT_SECONDS / dt)))
+        segments = max(1, -(-(max(e.n for e in exps) - 1) // length))
     if not isinstance(segments, int) or segments < 1:
         raise ValueError(f"segments must be a positive integer, not {segments!r}")
     t0 = time.perf_counter()
