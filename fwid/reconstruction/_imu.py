@@ -184,6 +184,29 @@ def choose_convention(t, pos, R, tracked, sensors, default: Convention, *, attit
     return chosen, msg + "; that reading is used (--strict-frame refuses instead)"
 
 
+def frame_from_gyro(t, rates, gyro, frame: str, f_flap=None) -> tuple[str, list[float]] | None:
+    """The tracking frame a gyro supports, when it is not `frame` (the one the take was read
+    in), else None. A take read in frame `F` whose truth is `G` has body rates `D w` with
+    `D = C_F C_G^T` (the frames' maps to north-east-down): each frame's rates `D^T w` are
+    scored against the gyro (bias removed, cycle-averaged) as in `choose_convention`.
+
+    **Returns:** `(frame, correlations per axis)` of the supported frame, or None."""
+    ok = np.all(np.isfinite(rates), 1) & np.all(np.isfinite(gyro), 1)
+    scores = {}
+    for g in FRAMES:
+        D = FRAMES[frame] @ FRAMES[g].T
+        r = _compare(t, gyro, rates @ D, ok, f_flap, centre=True)
+        if r is not None:
+            scores[g] = r
+    if frame not in scores:
+        return None
+    best = min(scores, key=lambda g: scores[g][0])
+    if best == frame or scores[frame][0] <= (1 + TIE) * scores[best][0] \
+            or max(scores[best][1]) < AGREE:
+        return None
+    return best, scores[best][1]
+
+
 def agreement(t, specific_force, rates, sensors, f_flap=None, bias=None) -> dict:
     """The `imu` block of `reconstruction.json`: for the accelerometer (against the
     reconstructed specific force `(n, 3)`, m/s^2) and the gyro (less its `bias`, against the

@@ -22,7 +22,7 @@ from ._attitude import smooth_attitude
 from ._body_frame import compose, split
 from ._checks import check_frame, residuals
 from ._clock import MIN_OVERLAP, ClockOffset, find_offset, resample
-from ._imu import agreement
+from ._imu import agreement, frame_from_gyro
 from ._loads import body_states, rigid_body_loads
 from ._model import HARMONICS, phase_of
 from ._raw import MAX_DROPOUT, RawTake
@@ -264,6 +264,14 @@ def _align(take: RawTake, w, sigma, clock_offset, min_overlap, f):
             f"{min_overlap:g} s at {at}; give the log of this take"
             + ("" if clock_offset is None else " or the right --clock-offset"))
     s, cols = _cut(take, clock, min_overlap)
+    other = frame_from_gyro(take.t[s], w[s], np.stack([cols[k] for k in "pqr"], 1), take.frame,
+                            f0)
+    if other is not None:
+        raise FlightDataError(
+            f"{take.path}: the autopilot's gyro disagrees with the body rates of the take read "
+            f"in the {take.frame} frame and agrees with them read in the {other[0]} frame "
+            f"(cycle-averaged correlation p, q, r {', '.join(f'{c:.2f}' for c in other[1])}); "
+            f"give --frame {other[0]}")
     return s, cols, clock
 
 

@@ -144,3 +144,17 @@ def test_too_short_overlap(tmp_path, motion, pose, capsys):
     assert rc == 2 and len(err) == 1 and "overlap" in err[0] and "m.csv" in err[0], err
 
 
+
+
+def test_wrong_frame_named_by_the_gyro(tmp_path, motion, pose, capsys):
+    """A Motive take (y-up) read as z-up: its autopilot's gyro agrees with the rates of the
+    y-up reading, and the message names that frame."""
+    pos, R = pose
+    p = write_motive(tmp_path / "m.csv", motion, T, pos=pos, R=R)
+    rc = main(["reconstruct", str(p), "--out", str(tmp_path / "out"), "--quiet",
+               "--frame", "z-up", "--no-figures", "--body", "DelFly"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "gyro" in err[0] and "--frame y-up" in err[0], err
+    assert main(["reconstruct", str(p), "--out", str(tmp_path / "ok"), "--quiet",
+                 "--no-figures", "--body", "DelFly"]) == 0
