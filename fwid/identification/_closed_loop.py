@@ -34,6 +34,9 @@ from scipy import signal, stats
 from ..data._flight import Flight
 from .._advice import advice
 
+#: The recorded controls tested: an input a model derives from them (the diagnosis's filtered
+#: deflection `de_eff`, say) follows the states through the recorded one by construction.
+RECORDED_CONTROLS = ("de", "dr")
 #: The control's own past in the restricted regression, in half periods of the cutoff.
 CONTROL_LAGS = 4
 #: The states' past added in the full regression.
@@ -64,8 +67,8 @@ class ClosedLoop:
 def closed_loop_test(flight: Flight, control: str, states: Sequence[str],
                      cutoff: float = 5.0) -> ClosedLoop | None:
     """[`ClosedLoop`][] for `control` against `states` of `flight` (`None` when the flight
-    lacks a column or is too short for the regressions)."""
-    if control not in flight or not all(s in flight for s in states):
+    lacks a column, is too short for the regressions, or `control` is not a recorded one)."""
+    if control not in RECORDED_CONTROLS or control not in flight or not all(s in flight for s in states):
         return None
     t = np.asarray(flight["t"], dtype=float)
     dt = float(t[1] - t[0])

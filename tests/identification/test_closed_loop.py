@@ -56,3 +56,13 @@ def test_the_warning_names_the_flight_and_the_method_in_the_users_terms():
 def test_a_flight_without_the_columns_or_too_short_is_not_judged():
     assert closed_loop_test(_flight(True), "dr", STATES) is None
     assert closed_loop_test(_flight(True, seconds=0.3), "de", STATES) is None
+
+
+def test_a_derived_input_is_not_tested():
+    """An input a model derives from the recorded control (the diagnosis's lagged `de_eff`)
+    is not the autopilot's: no closed-loop verdict on it."""
+    flight = _flight(closed=True)
+    states = ["q", "u", "w", "theta"]
+    assert closed_loop_test(flight, "de", states).closed
+    derived = flight.with_columns(de_eff=np.asarray(flight["de"]))
+    assert closed_loop_test(derived, "de_eff", states) is None
