@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .._errors import InputError
+from .._words import count
 
 #: The file `fwid reconstruct` writes beside the flights it rebuilds.
 FILE = "reconstruction.json"
@@ -115,18 +116,22 @@ def provenance_text(block: dict | None) -> str | None:
     offsets = [r["clock_offset_s"] for r in rows if isinstance(r.get("clock_offset_s"),
                                                                  (int, float))]
     if offsets:
-        parts.append(f"clock offsets {min(offsets):.3f} to {max(offsets):.3f} s")
+        lo, hi = f"{min(offsets):.3f}", f"{max(offsets):.3f}"
+        parts.append(f"clock offset {lo} s" if lo == hi else f"clock offsets {lo} to {hi} s")
     drop = [r for r in rows if r.get("dropouts")]
     if any("dropouts" in r for r in rows):
         total = sum(r.get("dropout_s", 0.0) for r in drop)
-        parts.append(f"tracking dropouts in {len(drop)} flights ({total:.2f} s in all)")
+        parts.append(f"tracking dropouts in {count(len(drop), 'flight')} ({total:.2f} s in all)")
     warned = [r["flight"] for r in rows if r.get("warnings")]
     if any("warnings" in r for r in rows):
         parts.append(f"warnings on {', '.join(warned)}" if warned else "no warnings")
     standard = {"flight", "source", "clock_offset_s", "dropouts", "dropout_s", "warnings"}
     extra = sorted({k for r in rows for k, v in r.items()
                     if k not in standard and isinstance(v, (int, float))})
+    words = {"duration_s": ("{} s long", "{} to {} s long"), "rate_hz": ("at {} Hz", "at {} to {} Hz")}
     for k in extra:
         vals = [r[k] for r in rows if isinstance(r.get(k), (int, float))]
-        parts.append(f"{k} {min(vals):.3g} to {max(vals):.3g}")
+        lo, hi = f"{min(vals):.3g}", f"{max(vals):.3g}"
+        one, two = words.get(k, (f"{k} {{}}", f"{k} {{}} to {{}}"))
+        parts.append(one.format(lo) if lo == hi else two.format(lo, hi))
     return "; ".join(parts)

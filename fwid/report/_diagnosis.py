@@ -9,10 +9,14 @@ from matplotlib.figure import Figure
 
 from ..diagnosis import BAND_NAMES, Diagnosis
 from ..diagnosis._provenance import provenance_text
-from ..diagnosis._selection import RATES_MARGIN
 from ..diagnosis._signals import AXIS_LOADS
 
 _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
+
+
+def _band_label(band: str) -> str:
+    """A band of the gap map as the figure labels it ("<5 Hz", "2f", "2f±", ...)."""
+    return dict(zip(BAND_NAMES, _BAND_LABELS)).get(band, band)
 
 
 def in_band_shrink(c: dict) -> float | None:
@@ -45,13 +49,14 @@ def _convergence_caution(sim: dict) -> str:
     base = sim.get("converged_baseline", False)
     aug = sim.get("converged_augmented", False)
     if not base and aug:
-        return ("; CAUTION: the baseline's output-error fit (without the effect) did not "
-                "converge (simulation.warnings), so the shrink may be overstated")
+        return ("; CAUTION: the model without the effect did not settle in its output-error "
+                "fit, as a model that lacks what the flights show often does, so the shrink may "
+                "be overstated: read it as an upper bound")
     if base and not aug:
-        return ("; CAUTION: the augmented model's output-error fit did not converge "
-                "(simulation.warnings), so the shrink may be understated")
-    return ("; CAUTION: the output-error fits did not converge (see simulation.warnings), "
-            "read the shrink as rough")
+        return ("; CAUTION: the model with the effect did not settle in its output-error fit, "
+                "so the shrink may be understated: read it as a lower bound")
+    return ("; CAUTION: neither model settled in its output-error fit: read the shrink as "
+            "rough")
 
 
 def _explanation_text(names: list[str]) -> str:
@@ -92,10 +97,10 @@ def diagnosis_summary(d: Diagnosis) -> str:
     lines = [
         (f"fwid diagnose ({d.axis}): {len(d.train)} training, {len(d.test)} test flights, "
         f"{len(d.folds)} scoring blocks"),
-        f"  gap: largest in {worst} ({loc['by_output'][worst]['unexplained_pct']:.1f} % "
-        f"unexplained), {bands[top_band]:.0f} % of it in band {top_band}; manoeuvre/steady RMS "
-        f"{tm['manoeuvre_to_steady']:.2f}"
-        + (f"; grows with {st['top']} (x{st['top_spread']:.1f} across its bins)"
+        f"  where the model misses: most in {worst}, {bands[top_band]:.0f} % of its held-out "
+        f"error at {_band_label(top_band)}; {tm['manoeuvre_to_steady']:.1f}x as large in the "
+        "manoeuvres as in steady flight"
+        + (f"; growing with {st['top']} ({st['top_spread']:.1f}x across its range)"
            if st["top"] else ""),
     ]
     if d.verdict == "none":
@@ -192,24 +197,25 @@ def diagnosis_summary(d: Diagnosis) -> str:
             + (f"; not in the cycle-averaged EOM: {', '.join(sim['left_out'])}"
                if sim["left_out"] else "")
             + _convergence_caution(sim))
-    lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'in-band shrink %':>16} "
-                 f"{'overall %':>9} {'detect. limit %':>15}")
+    lines.append("  each candidate added alone to the model, re-fitted on the training flights and "
+                 "scored on the test flights:")
+    lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'shrink in band %':>16} "
+                 f"{'overall %':>9} {'smallest seen %':>15}")
+    first = d.first_round or {}
     for k, c in enumerate(d.candidates + d.probes):
         if k == len(d.candidates):
             lines.append("  probes (outside the catalogue):")
         band = in_band_shrink(c)
+        p = first.get(c["effect"], {}).get("p", c["p"])
         lines.append(
-            f"  {c['effect']:<18} {('yes' if c['significant'] else 'no'):>6} {c['p']:8.2g} "
+            f"  {c['effect']:<18} {('yes' if c['significant'] else 'no'):>6} {p:8.2g} "
             f"{(f'{band:.1f}' if band is not None else '-'):>16} {c['shrink_pct']:9.1f} "
             f"{c['detection_limit_pct']:15.1f}"
         )
-    if d.rounds:
-        lines.append(f"  ('chosen': passed its round's level, alpha over the candidates in "
-                     f"play, {d.rounds[0]['level']:.2g} in the first round, with a held-out "
-                     f"gain of at least {d.settings.get('min_gain_pct', 2):g} %, and had the "
-                     "largest held-out gain of those that passed; an entry built on states' "
-                     "rates gives way to one with at least "
-                     f"1/{RATES_MARGIN:g} of its gain)")
+    lines.append("  (chosen: kept by the forward selection over the held-out blocks; p: the test "
+                 "of the candidate alone; smallest seen: the shrink the test detects with 80 % "
+                 "power. Details in diagnosis.json; how to read them: the guide's page on the "
+                 "diagnosis)")
     return "\n".join(lines)
 
 

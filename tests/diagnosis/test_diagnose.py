@@ -201,9 +201,13 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
     assert band == pytest.approx(100 * (1 - np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
     text = diagnosis_summary(d)
     assert f"{band:.1f} % in its band, {c['shrink_pct']:.1f} % overall" in text
-    # the rule behind 'chosen', with the first round's level
-    assert (f"('chosen': passed its round's level, alpha over the candidates in play, "
-            f"{d.rounds[0]['level']:.2g} in the first round") in text
+    # the table's columns said in words, each p the candidate's test alone (first round)
+    assert "(chosen: kept by the forward selection" in text
+    for c in d.candidates:
+        row = next(r for r in text.splitlines() if r.strip().startswith(c["effect"] + " "))
+        assert f"{d.first_round[c['effect']]['p']:8.2g}" in row, row
+    # the gap in the figure's words, no internal band names
+    assert "where the model misses" in text and "band averaged" not in text
     # a set of more than one explanation is said
     assert ("cannot tell them apart" in text) == (len(d.confidence_set) > 1)
     fig = plot_gap_map(d)
