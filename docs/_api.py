@@ -185,7 +185,7 @@ def pages(exports: dict[str, tuple[str, ...]], where=locate) -> dict[str, str]:
         out[f"{stage}.md"] = "\n".join(lines)
         links = ", ".join(f"[`{n}`]({stage}.md#fwid.{n})" for n in names)
         index.append(f"| [`fwid.{stage}`]({stage}.md) | {links} |")
-    lines = _stage_page("# `fwid.synth`: the embedded simulator", introduction("synth"),
+    lines = _stage_page("# `fwid.synth`", introduction("synth"),
                         "fwid.synth", SYNTH, _synth_where if where is locate else where,
                         lambda n: (f"fwid.synth.{n}",))
     out["synth.md"] = "\n".join(lines)
