@@ -49,45 +49,65 @@ def _links_to_plain(text: str) -> str:
 #: and what each of its results files holds (by file stem; the first is its main page, shown in
 #: the navigation). A results file not listed here goes under "Other results", by its title.
 BENCHMARKS = (
-    ("Speed of a fit", "How fast one fit and a batch of fits run, against scipy and a hand-written JAX loop.", {
+    ("Speed of a fit",
+     "How fast one fit and a batch of fits run, against scipy and a hand-written JAX loop.",
+     {
         "speed": "one fit and batches of fits: fwid, the scipy baseline, a hand-written JAX loop",
         "speed_process": "the whole `fwid identify` process on 1, 16 and 64 flights, cold and warm",
-        "simd": "the kernel of a Gauss-Newton step for 64 flights in three layouts, against the machine's limit",
+        "simd":
+            "a Gauss-Newton step's kernel for 64 flights in three layouts, against the machine",
         "distributed": "`fwid.fit_each` over one and two processes (`jax.distributed`)",
     }),
-    ("Joint fits", "Whether one fit to several flights predicts held-out flights better than one flight's fit.", {
+    ("Joint fits",
+     "Whether one fit to several flights predicts held-out flights better than one flight's fit.",
+     {
         "joint": "held-out error of joint against individual fits",
     }),
     ("Reconstruction", "How well raw tracking takes and autopilot logs become flight data.", {
-        "reconstruction": "simulated Motive takes against the simulator's truth: states, loads, clock offset, time",
-        "realdata": "real Flapper Drone flights: the reconstructed specific force against the onboard accelerometer",
+        "reconstruction":
+            "simulated Motive takes against the truth: states, loads, clock offset, time",
+        "realdata":
+            "real Flapper Drone flights: reconstructed specific force against the accelerometer",
     }),
-    ("Test inputs", "How much a designed input gains over a 3211 of the same amplitude and length.", {
+    ("Test inputs",
+     "How much a designed input gains over a 3211 of the same amplitude and length.",
+     {
         "design": "designed inputs against classic ones: predicted and actual parameter errors",
         "design_ceiling": "the predicted gain under harder searches",
         "design_discrimination": "inputs that tell two diagnosed effects apart",
     }),
-    ("Diagnosis: power", "How often `fwid diagnose` names the right effect, on a randomised benchmark split into a development and a held-out half.", {
-        "diagnosis_power_heldout": "the held-out half, seeds 1 and 3: coverage, decisiveness, false alarms, pairs",
+    ("Diagnosis: power",
+     "How often `fwid diagnose` names the right effect, on a randomised benchmark split into a "
+     "development and a held-out half.",
+     {
+        "diagnosis_power_heldout":
+            "the held-out half, seeds 1 and 3: coverage, decisiveness, false alarms, pairs",
         "diagnosis_power_dev": "the development half, on which the settings were chosen",
         "diagnosis_power_heldout_fresh": "further held-out seeds 5 and 7, run once",
         "diagnosis_power_heldout_fresh2": "further held-out seeds 9 and 11, run once",
         "diagnosis_power_heldout_fresh3": "further held-out seeds 13 and 15, run once",
         "diagnosis_power_heldout_fresh4": "further held-out seeds 17 and 19, run once",
-        "diagnosis_power_heldout_fresh5": "further held-out seeds 21 and 23, run once, with the confidence set scored",
+        "diagnosis_power_heldout_fresh5":
+            "further held-out seeds 21 and 23, run once, with the confidence set scored",
         "diagnosis_sets_dev_subset": "the confidence set on a subset of the development half",
         "diagnosis_sets_heldout_subset": "the confidence set on a subset of the held-out half",
-        "diagnosis_family_actuator_heldout": "`actuator-dynamics` as a family of filters, held-out forms",
-        "diagnosis_family_actuator_heldout_before": "the same cases with lags and delays only, for comparison",
-        "diagnosis_family_quiet_heldout": "clean and out-of-catalogue cases with the family of filters",
-        "diagnosis_family_quiet_heldout_before": "the same cases with lags and delays only, for comparison",
+        "diagnosis_family_actuator_heldout":
+            "`actuator-dynamics` as a family of filters, held-out forms",
+        "diagnosis_family_actuator_heldout_before":
+            "the same cases with lags and delays only, for comparison",
+        "diagnosis_family_quiet_heldout":
+            "clean and out-of-catalogue cases with the family of filters",
+        "diagnosis_family_quiet_heldout_before":
+            "the same cases with lags and delays only, for comparison",
         "diagnosis": "the first withheld-effect benchmark: gap closure per effect",
     }),
     ("Diagnosis: peers", "`fwid diagnose` beside a SINDy peer on the same flights.", {
         "diagnosis_peers_heldout": "fwid and SINDy on 12 held-out cases",
         "diagnosis_peers_heldout_noderiv": "the SINDy peer without derivative terms",
     }),
-    ("Diagnosis: raw recordings", "The diagnosis end to end from raw tracking takes through `fwid reconstruct`.", {
+    ("Diagnosis: raw recordings",
+     "The diagnosis end to end from raw tracking takes through `fwid reconstruct`.",
+     {
         "raw_diagnosis_heldout": "held-out seeds: clean and lagging-actuator sets",
         "raw_diagnosis_dev": "development seeds",
     }),
