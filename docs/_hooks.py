@@ -1,11 +1,13 @@
 """mkdocs hook: pages built from files outside `docs/`, and the navigation that lists them.
 
-- `benchmarks/index.md` and one page per `benchmarks/results/*.md` (with the figures they
-  show), so that the site shows the measured results as they were written, with the command,
-  commit and date at their top;
+- `benchmarks/index.md` (a table per benchmark, `BENCHMARKS`, naming what each results file
+  holds) and one page per `benchmarks/results/*.md` (with the figures they show), so that the
+  site shows the measured results as they were written, with the command, commit and date at
+  their top;
 - `changelog.md` from the repository's `CHANGELOG.md`;
-- the "API reference" and "Benchmarks" sections of the navigation list every page of
-  `docs/api/` (in the order of `docs/api/index.md`) and every results page.
+- the "API reference" section of the navigation lists every page of `docs/api/` (in the order
+  of `docs/api/index.md`); the "Benchmarks" section the overview and each benchmark's main
+  results page by the benchmark's name (the other results files are linked from the overview).
 
 A docstring may refer to a private helper of its own module (`[`name`][]`, diffrax's style);
 the site documents the public names only, so such a reference is shown as code, not reported
@@ -43,25 +45,114 @@ def _links_to_plain(text: str) -> str:
                   else f"*(figure `{m.group(1)}` not kept in the repository)*", text)
 
 
+#: The benchmarks, in the order the site lists them: a readable name, the question it answers,
+#: and what each of its results files holds (by file stem; the first is its main page, shown in
+#: the navigation). A results file not listed here goes under "Other results", by its title.
+BENCHMARKS = (
+    ("Speed of a fit",
+     "How fast one fit and a batch of fits run, against scipy and a hand-written JAX loop.",
+     {
+        "speed": "one fit and batches of fits: fwid, the scipy baseline, a hand-written JAX loop",
+        "speed_process": "the whole `fwid identify` process on 1, 16 and 64 flights, cold and warm",
+        "simd":
+            "a Gauss-Newton step's kernel for 64 flights in three layouts, against the machine",
+        "distributed": "`fwid.fit_each` over one and two processes (`jax.distributed`)",
+    }),
+    ("Joint fits",
+     "Whether one fit to several flights predicts held-out flights better than one flight's fit.",
+     {
+        "joint": "held-out error of joint against individual fits",
+    }),
+    ("Reconstruction", "How well raw tracking takes and autopilot logs become flight data.", {
+        "reconstruction":
+            "simulated Motive takes against the truth: states, loads, clock offset, time",
+        "realdata":
+            "real Flapper Drone flights: reconstructed specific force against the accelerometer",
+    }),
+    ("Test inputs",
+     "How much a designed input gains over a 3211 of the same amplitude and length.",
+     {
+        "design": "designed inputs against classic ones: predicted and actual parameter errors",
+        "design_ceiling": "the predicted gain under harder searches",
+        "design_discrimination": "inputs that tell two diagnosed effects apart",
+    }),
+    ("Diagnosis: power",
+     "How often `fwid diagnose` names the right effect, on a randomised benchmark split into a "
+     "development and a held-out half.",
+     {
+        "diagnosis_power_heldout":
+            "the held-out half, seeds 1 and 3: coverage, decisiveness, false alarms, pairs",
+        "diagnosis_power_dev": "the development half, on which the settings were chosen",
+        "diagnosis_power_heldout_fresh": "further held-out seeds 5 and 7, run once",
+        "diagnosis_power_heldout_fresh2": "further held-out seeds 9 and 11, run once",
+        "diagnosis_power_heldout_fresh3": "further held-out seeds 13 and 15, run once",
+        "diagnosis_power_heldout_fresh4": "further held-out seeds 17 and 19, run once",
+        "diagnosis_power_heldout_fresh5":
+            "further held-out seeds 21 and 23, run once, with the confidence set scored",
+        "diagnosis_sets_dev_subset": "the confidence set on a subset of the development half",
+        "diagnosis_sets_heldout_subset": "the confidence set on a subset of the held-out half",
+        "diagnosis_family_actuator_heldout":
+            "`actuator-dynamics` as a family of filters, held-out forms",
+        "diagnosis_family_actuator_heldout_before":
+            "the same cases with lags and delays only, for comparison",
+        "diagnosis_family_quiet_heldout":
+            "clean and out-of-catalogue cases with the family of filters",
+        "diagnosis_family_quiet_heldout_before":
+            "the same cases with lags and delays only, for comparison",
+        "diagnosis": "the first withheld-effect benchmark: gap closure per effect",
+    }),
+    ("Diagnosis: peers", "`fwid diagnose` beside a SINDy peer on the same flights.", {
+        "diagnosis_peers_heldout": "fwid and SINDy on 12 held-out cases",
+        "diagnosis_peers_heldout_noderiv": "the SINDy peer without derivative terms",
+    }),
+    ("Diagnosis: raw recordings",
+     "The diagnosis end to end from raw tracking takes through `fwid reconstruct`.",
+     {
+        "raw_diagnosis_heldout": "held-out seeds: clean and lagging-actuator sets",
+        "raw_diagnosis_dev": "development seeds",
+    }),
+    ("Diagnosis: time", "What `fwid diagnose` costs against `fwid identify` on the same flights.", {
+        "diagnosis_speed": "clean flights, whole process",
+        "diagnosis_speed_nonlinear": "flights with a `nonlinear-aero` verdict",
+    }),
+)
+
+
+def _benchmarks() -> list[tuple[str, str, list[tuple[str, str]]]]:
+    """The benchmarks with their results files that exist: (name, question, [(stem, what)])."""
+    present = {md.stem: md for md in RESULTS.glob("*.md")}
+    out, seen = [], set()
+    for name, question, files in BENCHMARKS:
+        rows = [(stem, what) for stem, what in files.items() if stem in present]
+        seen |= set(files)
+        if rows:
+            out.append((name, question, rows))
+    other = [(stem, _title(present[stem].read_text(), stem)) for stem in sorted(present)
+             if stem not in seen]
+    if other:
+        out.append(("Other results", "Results files not yet described here.", other))
+    return out
+
+
 def results_pages() -> dict[str, str]:
-    """The benchmarks pages: an index and one page per results Markdown file."""
+    """The benchmarks pages: an index (a table per benchmark naming what each results file
+    holds) and one page per results Markdown file."""
     pages = {}
-    rows = []
     for md in sorted(RESULTS.glob("*.md")):
-        text = md.read_text()
-        pages[f"benchmarks/{md.stem}.md"] = _links_to_plain(text)
-        rows.append(f"| [{_title(text, md.stem)}]({md.stem}.md) | `benchmarks/results/{md.name}` |")
+        pages[f"benchmarks/{md.stem}.md"] = _links_to_plain(md.read_text())
     index = ["# Benchmarks", "",
-             "Each benchmark is one script in `benchmarks/` that answers one question and writes "
+             "Each benchmark is a script in `benchmarks/` that answers one question and writes "
              "its figures to `benchmarks/results/NAME.md` (and `.json`), starting with the "
-             "command, the commit and the date that produced them. The pages below are those "
-             "files as they were written; the guide pages quote their figures.", "",
-             "| results | file |", "|---|---|", *rows, ""]
-    readme = ROOT / "benchmarks" / "README.md"
-    if readme.exists():
-        body = readme.read_text().split("\n", 1)[1]
-        body = re.sub(r"^(#+) ", r"#\1 ", body, flags=re.M)  # below this page's title
-        index += ["## The scripts", "", _links_to_plain(body)]
+             "command, the commit and the date that produced them. The tables below say what "
+             "each results file holds; its page shows the file as it was written. The guide "
+             "pages quote their figures.", ""]
+    for name, question, rows in _benchmarks():
+        index += [f"## {name}", "", question, "", "| results | what it holds |", "|---|---|"]
+        index += [f"| [`{stem}`]({stem}.md) | {what} |" for stem, what in rows]
+        index.append("")
+    index += ["## Running them", "",
+              "`benchmarks/README.md` in the repository lists every script, its options and "
+              "the command behind each results file.", ""]
     pages["benchmarks/index.md"] = "\n".join(index)
     return pages
 
@@ -137,9 +228,10 @@ def on_config(config):
     for name in _api_pages():
         text = (API / name).read_text()
         api.append({_title(text, name[:-3]): f"api/{name}"})
+    # the benchmarks: the overview, then each benchmark's main results page by its name
     bench = [{"Overview": "benchmarks/index.md"}]
-    for md in sorted(RESULTS.glob("*.md")):
-        bench.append({md.stem: f"benchmarks/{md.stem}.md"})
+    bench += [{name: f"benchmarks/{rows[0][0]}.md"} for name, _, rows in _benchmarks()
+              if name != "Other results"]
     config["nav"] = _expand(_expand(config["nav"], "api/index.md", api),
                             "benchmarks/index.md", bench)
     logging.getLogger("mkdocs.plugins.mkdocs_autorefs._internal.plugin").addFilter(_private_refs)

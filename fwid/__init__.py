@@ -16,7 +16,8 @@ device as before.
 name of `fwid` is looked up in its stage's package on first use: `fwid.fit` imports
 `fwid.estimate`), so `fwid --help` answers without them. JAX is set up right after its first
 import, wherever it happens (`fwid._jax_setup.on_jax_import`); fwid also keeps compiled
-programs in a per-user cache folder (`FWID_JAX_CACHE`; README, 'Compilation cache').
+programs in a per-user cache folder (`FWID_JAX_CACHE`; the guide's page 'The command line',
+'Compilation cache').
 """
 
 import importlib

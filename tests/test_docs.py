@@ -108,3 +108,47 @@ def test_lists_in_docstrings_get_their_blank_line():
 
     text = "Summary.\n\n**Arguments:**\n- `x`: one,\n  continued.\n- `y`: two.\n\n```\n- not a list\n```"
     assert _griffe.blank_line_before_lists(text) == text.replace(":**\n-", ":**\n\n-")
+
+
+#: What a user's page must not hold: the internal interface notes, an issue number, a commit
+#: hash, or a private module's file name (`_fit.py`, `fwid/estimate/_shooting.py`). History
+#: belongs to CHANGELOG.md, how fwid decides inside to the contributors' pages.
+INTERNAL = re.compile(r"CONTRACTS|\b[Ii]ssues? #?\d+"
+                      r"|\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*\d)[0-9a-f]{7,40}\b"
+                      r"|\b(?:commit|code of) [0-9a-f]{7,40}\b"
+                      r"|(?:^|[^\w.])_[a-z][a-z0-9_]*\.py\b", re.M)
+
+
+def _internal_mentions(text: str) -> list[str]:
+    return [m.group(0).strip() for m in INTERNAL.finditer(text)]
+
+
+def test_user_pages_hold_no_internal_notes():
+    """README.md and the documentation pages (not the contributors' pages) name no internal
+    notes, issue numbers, commit hashes or private module files."""
+    docs = ROOT / "docs"
+    pages = [ROOT / "README.md", *(p for p in docs.rglob("*.md")
+                                   if "contributing" not in p.relative_to(docs).parts)]
+    found = [f"{p.relative_to(ROOT)}:{n}: {hit}" for p in pages
+             for n, line in enumerate(p.read_text().splitlines(), 1)
+             for hit in _internal_mentions(line)]
+    assert not found, "\n".join(found)
+
+
+def test_internal_notes_check_can_fail():
+    assert _internal_mentions("see CONTRACTS section 3, issue 13, 46d35b2 and the code of "
+                              "2088021 (`fwid/estimate/_shooting.py`, `_riccati.py`)") == [
+        "CONTRACTS", "issue 13", "46d35b2", "code of 2088021", "/_shooting.py", "`_riccati.py"]
+    assert _internal_mentions("`tests/estimate/test_attas.py`, `benchmarks/diagnosis_power.py`, "
+                              "`__init__.py`, 0.0253, 1e-10, a 3211 input") == []
+
+
+def test_every_api_page_has_an_introduction():
+    """Every stage's page (and `fwid.synth`'s) opens with its package docstring's paragraphs,
+    which end with a sentence and name no private module file."""
+    for stage in (*fwid.EXPORTS, "synth"):
+        intro = _api.introduction(stage)
+        assert intro, f"fwid/{stage}/__init__.py: no docstring to introduce its API page"
+        assert intro.rstrip().endswith((".", ")", ":")) and not intro.rstrip().endswith(":"), \
+            f"fwid.{stage}: its introduction stops mid-sentence: {intro[-60:]!r}"
+        assert not _internal_mentions(intro), (stage, _internal_mentions(intro))

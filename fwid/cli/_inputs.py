@@ -78,6 +78,6 @@ def read_sets(*groups, require=(), vehicle_for: str | None = None) -> list[list]
         if vehicle_for and r.vehicle is None:
             raise FlightDataError(
                 f"{r.path}: the {vehicle_for} model needs the vehicle's mass and inertia but "
-                "no vehicle.json was found beside the flight; add one (README, \"Your own "
-                "flights\")")
+                "no vehicle.json was found beside the flight; add one (the guide's 'Formats "
+                "and interfaces' page, docs/reference/formats.md)")
     return sets

@@ -1,5 +1,5 @@
 """`fwid template DIR`: an example folder in fwid's flight format that a user overwrites with
-their own data (README, 'Your own flights')."""
+their own data (the guide's page 'Your own flights', docs/guide/data.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,15 @@
 """Test inputs designed through the identified model (the test-input format).
 
+[`fwid.design_input`][] designs the control input of the next flight from an identified model:
+the input, within an amplitude, a duration and an attitude limit, that minimises the
+predicted parameter variances (or maximises the determinant of the information, D-optimal),
+returned as a [`fwid.Design`][] with the predicted standard deviations against a 3211 of the
+same amplitude and length. [`fwid.design_discriminating`][] designs the input that best tells
+two diagnosed explanations apart ([`fwid.Discrimination`][]). `fwid design` does both from the
+command line; the guide's page "Test inputs" shows how.
+
+The modules:
+
 - `_signals.py`: the design grid, the two parametrisations (multisine with free amplitudes and
   phases; a free piecewise-constant sequence) and the classic inputs (doublet, 3211,
   Schroeder-phased multisine, random binary sequence);

@@ -204,7 +204,7 @@ def design_input(
     `benchmarks/design.py`).
 
     A model whose outputs are affine in the input from rest (the DelFly models: linear
-    time-invariant from trim; checked numerically, `_affine.py`) is simulated once per basis
+    time-invariant from trim; checked numerically) is simulated once per basis
     signal (each step, or each sine and cosine), and the information is then a quadratic form
     in the input's coefficients; any other model is simulated at every step. The gradient is
     `jax.grad` (through the RK4 solve and its sensitivity equations on the second path); Adam

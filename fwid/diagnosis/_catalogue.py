@@ -282,6 +282,8 @@ class Effect:
     sized: bool = False
 
 
+#: The candidate effects that `fwid.diagnose` tries, in this order; their names are the
+#: effect names of `diagnosis.json` and of `fwid simulate --effect`.
 CATALOGUE: tuple[Effect, ...] = (
     Effect(
         "flap-coupling",

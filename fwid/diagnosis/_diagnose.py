@@ -28,11 +28,12 @@ from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, si
 class Diagnosis:
     """The result of [`fwid.diagnose`][]: `verdict` (an effect name, `"unexplained"`,
     `"random-disturbance"` or `"none"`), `disturbance` (the colour, size and spectrum of the
-    baseline's cycle-averaged held-out residual, `_disturbance.py`), `process_noise` (with a
+    baseline's cycle-averaged held-out residual), `process_noise` (with a
     `"random-disturbance"` verdict, the baseline fitted by filter error on the training
-    flights: the process noise F it takes and whether its innovations are white,
-    `_process_noise.py`; `None` otherwise), `candidates` (the catalogue, ranked, best first, the report format), `probes`
-    (the same for the structure outside the catalogue, `_probes.py`), `unexplained` (what the
+    flights: the process noise F it takes and whether its innovations are white; `None`
+    otherwise), `candidates` (the catalogue, ranked, best first; the keys of `diagnosis.json`
+    on the guide's 'Formats and interfaces' page), `probes`
+    (the same for the structure outside the catalogue), `unexplained` (what the
     first probe selected says: drivers and shrink; `None` when no probe is selected, or when
     it came first after a proxy of a disturbance was set aside),
     `localisation` (the gap map of the baseline on the test flights), `rounds` (the forward
@@ -43,8 +44,8 @@ class Diagnosis:
     a candidate was or was not added), and the held-out load residuals before (`residuals`)
     and after each candidate or probe (`augmented[name]`), by test flight and load, for
     figures; `confidence_set` (the explanations the held-out blocks cannot tell from the
-    best, best first, `_confidence.py`) and `states` (whether the states came from
-    `fwid reconstruct`, `_provenance.py`)."""
+    best, best first) and `states` (whether the states came from
+    `fwid reconstruct`)."""
 
     axis: str
     train: list[str]
@@ -161,11 +162,11 @@ def diagnose(
        effect that replaces the deflection acts on all). Its out-of-sample value is
        measured by a cross-fit (fitted on the training flights and scored on the test
        flights' blocks of about 1 s, and the other way round), pooled over the loads of its
-       band, and judged by a one-sided t test across blocks (`_significance.py`). Effects are
+       band, and judged by a one-sided t test across blocks. Effects are
        added by forward selection while one passes at `alpha` divided by the candidates still
-       in play (`_selection.py`): `effects` lists them in the order added, each with its
+       in play: `effects` lists them in the order added, each with its
        held-out gain relative to the first's (`relative_gain`).
-       How sure the choice is, the **confidence set** says (`_confidence.py`): every
+       How sure the choice is, the **confidence set** says: every
        explanation (none, each candidate or probe, the pairs of the best four, the
        selection's model; `unsteady-aero` alone only) that the held-out blocks cannot
        reject against the best at `_confidence.LEVEL` (Hansen, Lunde & Nason's model
@@ -177,13 +178,13 @@ def diagnose(
        of the RMS of the affected loads (each relative to its baseline RMS).
     3. **Where**: the gap map of the baseline on the test flights (`gap_map`).
 
-    The probes (`_probes.py`: the attitude, a drift over the flight) take
+    The probes (the attitude, a drift over the flight) take
     part in the selection as rivals: when one enters first, the gap is
     predictable from what was measured but no catalogue entry explains it, and the verdict is
     `"unexplained"` (with the probe's `drivers`), never the catalogue entry that merely
     correlates with it.
 
-    4. **Nothing named**: the colour of the held-out residual (`_disturbance.py`) tells a
+    4. **Nothing named**: the colour of the held-out residual tells a
        disturbance nothing measured predicts (`"random-disturbance"`: red, as gusts make it)
        from measurement noise (`"none"`: the model is adequate, up to the detection limit).
        A probe that leaves the residual red was a proxy of a disturbance, not structure; so
@@ -207,15 +208,15 @@ def diagnose(
     training vs test, or more, each group of flights scored by the model fitted on all the
     others; `None`: eight for a campaign of at most eight flights, else two,
     `_significance.default_folds`),
-    `simulation` (also measure the gap in the simulated states, `_simulation.py`: the
+    `simulation` (also measure the gap in the simulated states, the
     verdict's effects put into the EOM, re-estimated by output error on the training flights,
     simulated on the test flights; `Diagnosis.models` keeps both identifications),
     `process_noise` (with a `"random-disturbance"` verdict, also fit the baseline by filter
-    error on the training flights, Jategaonkar Ch. 5, `_process_noise.py`: the process noise
+    error on the training flights, Jategaonkar Ch. 5, the process noise
     as evidence; a failed fit is recorded in the block, never raised), `reconstruction`
     (per training then test flight, its entry in the `reconstruction.json` beside it, as
-    `read_reconstruction` returns them: reported beside the verdict as the `states` block,
-    `_provenance.py`), `progress` (called with a line of text at each stage).
+    `read_reconstruction` returns them: reported beside the verdict as the `states` block),
+    `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
     check_axis(train, axis, "training")

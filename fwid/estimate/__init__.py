@@ -1,3 +1,16 @@
+"""Estimation: the free parameters of a grey-box model from flight data.
+
+[`fwid.fit`][] estimates them by output-error maximum likelihood (Eqs. 10-11 of the paper,
+Gauss-Newton with the noise covariance relaxed at every step), or by multiple shooting for
+unstable vehicles ([`fwid.fit_shooting`][]) and filter error for flights in turbulence
+([`fwid.fit_filter_error`][]). [`fwid.fit_each`][] fits many flights one by one in a single
+call, spread over the devices (and, after [`fwid.initialize_distributed`][], over processes).
+A prior and bounds ([`fwid.prior_from`][], [`fwid.prior_information`][]) add what is known
+before the flight. Every fit returns a [`fwid.FitResult`][]: the estimates, their standard
+deviations and correlations, and whether it converged. The guide's pages on identification
+and on the prior and bounds show them at work.
+"""
+
 from ._gauss_newton import RelaxedGaussNewton as RelaxedGaussNewton
 from ._problem import FitResult as FitResult
 from ._prior import (

@@ -91,7 +91,7 @@ def fit_each(
     XLA computation: no Python loop over flights. The estimates are those of [`fwid.fit`][]
     on each flight alone. Arguments as for [`fwid.fit`][].
 
-    `method` and `options` pick the estimator as in [`fwid.fit`][] (`_fit.py`):
+    `method` and `options` pick the estimator as in [`fwid.fit`][]:
     `"output-error"` (the default) is the vmapped call above; `"multiple-shooting"` and
     `"filter-error"` are not vmapped (their Python-level loops: the segments' layout, the
     filter error's relaxation passes of R with the F compensation, Eq. 5.41) but run as
@@ -102,7 +102,7 @@ def fit_each(
 
     After [`fwid.initialize_distributed`][] on every process of a cluster, the same call on
     every process, with the same experiments, spreads the vmapped call over the devices of
-    all processes, and every process gets every result (`_distributed.py`).
+    all processes, and every process gets every result.
 
     **Returns:** one [`fwid.FitResult`][] per experiment, in order (a
     [`fwid.FilterErrorResult`][] each with `method="filter-error"`).

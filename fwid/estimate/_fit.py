@@ -54,8 +54,10 @@ def fit(
     - `noise`: `"full"` R (Eq. 11), `"diagonal"` (uncorrelated output noise), or `"auto"`:
       a full R, replaced by a diagonal one when the full-R fit does not converge, is not
       finite or ends with an ill-conditioned R (`FitResult.noise` says which was used).
-    - `max_steps`: Gauss-Newton steps (each relaxes R). `max_passes` is accepted for
-      compatibility and unused (R used to be relaxed between whole Gauss-Newton solves).
+    - `max_steps`: the most Gauss-Newton steps (each relaxes R); this alone bounds the fit.
+    - `max_passes`: deprecated and ignored: R is relaxed at every Gauss-Newton step, so there
+      are no separate relaxation passes to count. Passing it changes nothing; it will be
+      removed in a future version (bound the fit with `max_steps`).
     - `rtol`: stop when the next step is below `1e-9 + rtol |theta_i|` for every parameter,
       in units in which each has unit sensitivity (about its standard deviation), ...
     - `cost_rtol`: ... and the cost has settled to `cost_rtol (1 + |cost|)`.
@@ -65,8 +67,9 @@ def fit(
       error (`True` makes filter error estimate them per flight too).
     - `progress`: print a line when the fit starts and ends.
     - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
-      (`fwid.estimate._shooting`; option `segments` per experiment, default 10 samples each);
-      `"filter-error"` for data with process noise (`fwid.estimate._filter_error`).
+      ([`fwid.fit_shooting`][]; option `segments` per experiment, default segments of 10
+      samples and at least 0.5 s); `"filter-error"` for data with process noise
+      ([`fwid.fit_filter_error`][]).
     - `prior`: a Gaussian prior on parameters, `{name: (mean, std)}` (or
       `{name: {"mean": .., "std": ..}}`, a [`fwid.FitResult`][], an identification, a
       `report.json` dict or file: see [`fwid.prior_from`][], which also scales it). Each

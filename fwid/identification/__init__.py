@@ -1,19 +1,18 @@
 """The identification pipelines: the stages below joined into the paper's workflows.
 
-- [`fwid.identify`][] -> [`fwid.Identification`][] (`_cycle_averaged.py`): the cycle-averaged
+- [`fwid.identify`][] -> [`fwid.Identification`][]: the cycle-averaged
   model, Section IV (Eqs. 1-11), per flight or joint, with modes and validation.
-- [`fwid.compare_joint`][] -> [`fwid.JointComparison`][] (`_joint.py`): a joint fit against
+- [`fwid.compare_joint`][] -> [`fwid.JointComparison`][]: a joint fit against
   individual fits on held-out flights.
-- [`fwid.identify_flapping_model`][] -> [`fwid.FlappingIdentification`][] (`_flapping.py`):
+- [`fwid.identify_flapping_model`][] -> [`fwid.FlappingIdentification`][]:
   the Fourier model of the flapping forces, Section V (Eq. 12).
-- [`fwid.steady_vs_manoeuvre`][] -> [`fwid.SteadyVsManoeuvre`][] (`_steady.py`): the flapping
+- [`fwid.steady_vs_manoeuvre`][] -> [`fwid.SteadyVsManoeuvre`][]: the flapping
   model on a flight's quiet start vs its manoeuvre (Figures 12, 14).
-- [`fwid.identify_combined`][] -> [`fwid.CombinedIdentification`][] (`_combined.py`): both
+- [`fwid.identify_combined`][] -> [`fwid.CombinedIdentification`][]: both
   parts in the EOM, Section VI (Eqs. 13-15).
 
-What they share: [`fwid.FlightFit`][] and [`fwid.evaluate`][] (`_flight_fit.py`, a model's
-response on one flight and its metrics) and the flapping data of a flight
-(`_flapping_data.py`). Reports, summaries and figures of every pipeline are in
+What they share: [`fwid.FlightFit`][] and [`fwid.evaluate`][] (a model's response on one
+flight and its metrics). Reports, summaries and figures of every pipeline are in
 `fwid.report`; the command line is in `fwid.cli`.
 """
 

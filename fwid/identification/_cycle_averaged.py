@@ -116,7 +116,8 @@ def _say_missing_forces(model: GreyBoxModel, flights: Sequence[Flight]) -> None:
             f"{', '.join(lacking)}: no force/moment columns {' '.join(model.force_names)}; the "
             f"{model.name} model is fitted to the states alone, from the state-derivative "
             "regression start instead of the reconstructed forces (Sec. IV.B), and no force "
-            "metrics are reported. Add the columns (README, 'Your own flights') to use them.",
+            "metrics are reported. Add the columns (the guide's 'Formats and interfaces' page, "
+            "docs/reference/formats.md) to use them.",
             UserWarning, stacklevel=3)
 
 

@@ -156,7 +156,7 @@ def identify_flapping_model(
     - `validate`: validation flights, scored with the model after phase alignment.
     - `joint`: fit one coefficient set to all (aligned) flights; otherwise each flight is
       fitted alone and the model is the mean of their (aligned) coefficients.
-    - `cutoff`, `noise_cutoff`, `cycle`: see `flapping_data` (`fwid/identification/_flapping_data.py`); `cycle` may be one
+    - `cutoff`, `noise_cutoff`, `cycle`: see `flapping_data`; `cycle` may be one
       model or one per flight, `validate_cycle` likewise for the validation flights.
     - `check_frequency`: cross-check the `f` column against the forces' spectrum.
     - `progress`: print what it does.

@@ -1,3 +1,14 @@
+"""Models: the paper's grey-box models, as differentiable pytrees.
+
+A [`fwid.GreyBoxModel`][] holds the state equation, the outputs and the named parameters
+(free or fixed) of a model. The paper's models are built by functions:
+[`fwid.longitudinal`][] and [`fwid.lateral`][] (the cycle-averaged models, Eqs. 1-9, Tables 1
+and 4), [`fwid.fourier_model`][] and [`fwid.fourier_series`][] (the flapping forces as a
+Fourier series in the flapping phase, Eq. 12), and [`fwid.combined`][] (both in the equations
+of motion, Eqs. 13-15). A model is simulated by `fwid.simulation` and fitted by
+`fwid.estimate`; the pipelines of `fwid.identification` build and fit them for you.
+"""
+
 from ._delfly import (
     TABLE1 as TABLE1,
     TABLE4 as TABLE4,

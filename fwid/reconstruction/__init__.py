@@ -1,5 +1,16 @@
-"""From what a lab records to flight data (the guide's page on raw recordings): raw tracking takes and
-autopilot logs to the section-1 flights every other stage reads.
+"""From what a lab records to flight data: raw tracking takes and autopilot logs to the flight
+files every other stage reads.
+
+[`fwid.read_raw`][] reads a take (a fwid raw CSV, or an OptiTrack Motive export with its
+autopilot log) and [`fwid.read_map`][] a recording map for a lab's own columns;
+[`fwid.reconstruct`][] smooths the pose, aligns the autopilot's clock, and computes the body
+states and aerodynamic loads from the full nonlinear rigid-body equations;
+[`fwid.write_reconstruction`][] writes the flights and `reconstruction.json`. `fwid
+reconstruct` does it all from the command line. The raw forms and the keys of
+`reconstruction.json` are on the guide's page "Formats and interfaces"; the pages "Raw
+recordings and reconstruction" and "Your lab's recordings" say how to use them.
+
+The modules:
 
 - Reading (numpy, no JAX): the form is told by the first line (`_read.py`, [`fwid.read_raw`][]):
   the fwid raw CSV (`_fwid_raw.py`) and the OptiTrack Motive CSV export with its autopilot
@@ -27,8 +38,7 @@ autopilot logs to the section-1 flights every other stage reads.
 `reconstruction.json` holds `{"flights": [entry, ..]}`, one entry per flight:
 
 - `flight`, `source`, `clock_offset_s` (`t_tracking = t_onboard + clock_offset_s`; 0 when one
-  file holds both), `dropouts` (`[start, end]` times of the samples lost), `warnings`
-  (the guide's page on raw recordings);
+  file holds both), `dropouts` (`[start, end]` times of the samples lost), `warnings`;
 - `rate_hz`, `duration_s`: the flight's time base;
 - `clock`: the offset's quality, or null without a log: `offset_s`, `std_s` (its standard
   error from the curvature of the fit), `corr` (correlation of the aligned gyro and

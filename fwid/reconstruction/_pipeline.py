@@ -201,7 +201,7 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
                 min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None,
                 processes: int | None = None, pool=None, recording_map=None,
                 strict_frame: bool = False) -> Reconstruction:
-    """Raw takes to section-1 flights (the guide's page on raw recordings), smoothed and with their loads.
+    """Raw takes to flights (the flight files of 'Formats and interfaces'), smoothed, with loads.
 
     The states come from the smoother, the loads from the full nonlinear rigid-body
     equations; a take that fails is reported and the others go on.

@@ -1,5 +1,18 @@
 """What the pipelines found, for people and for programs (the report format).
 
+The JSON reports that the command line writes (`report.json`, `diagnosis.json`; their keys are
+listed in the guide's page "Formats and interfaces"), written whole or not at all by
+[`fwid.write_json`][], with [`fwid.identification_report`][] building `report.json`'s content
+from an identification; and the figures, drawn with object-oriented matplotlib (each function
+returns a `Figure` and, given a path, saves it): the fits and poles
+([`fwid.plot_flight_fit`][], [`fwid.plot_poles`][], Figures 6-11 of the paper), the split
+([`fwid.plot_decomposition`][], Figure 4), time and spectrum of the flapping forces
+([`fwid.plot_time_and_spectrum`][], [`fwid.plot_steady_vs_manoeuvre`][],
+[`fwid.plot_superposition`][], Figures 12-17) and a reconstructed take
+([`fwid.plot_reconstruction`][]).
+
+The modules:
+
 - JSON reports (`report.json`, `diagnosis.json`), written whole or not at all:
   [`fwid.write_json`][] (`_json.py`); [`fwid.identification_report`][] (`_identification.py`,
   `--model lon|lat`, and the blocks the other reports share); `flapping_report`,

@@ -93,7 +93,8 @@ def experiment(flight, model, *, x0: str = "first") -> Experiment:
         elif k in ("mass", "Ix", "Iy", "Iz", "Ixz", "g"):
             raise FlightDataError(
                 f"{flight.name}: the {model.name} model needs the vehicle's '{k}' but no "
-                "vehicle.json was found beside the flight; add one (README, \"Your own flights\")"
+                "vehicle.json was found beside the flight; add one (the guide's 'Formats and "
+                "interfaces' page, docs/reference/formats.md)"
             )
         else:
             raise FlightDataError(

@@ -5,15 +5,16 @@ cycle-averaged aerodynamics Eqs. 1-6 of Tables 1 and 4, and the flapping Fourier
 Eq. 12 of Table 7, superposed as in Eqs. 13-15), with realistic measurement: rippling
 control surfaces, sensor noise, and loads reconstructed from the measured motion. Flights are
 written as in the flight-data format; `effect` injects an unmodelled effect (the effect names) in one of
-a family of forms (`form`, `FORMS`; equations in `fwid.synth._effects`), or two at once;
+a family of forms (`form`, `FORMS`), or two at once;
 `effect_noise_ratio` measures how strong it is against the noise on its loads, and
 `random_vehicle` draws a stable DelFly with every derivative and Fourier coefficient within
 +-30 % of the paper's.
 
-Raw recordings (the raw-recording formats): `_sixdof` flies the same vehicle and loads with the
-full nonlinear rigid-body equations (JAX, diffrax); `_raw` records such a flight as a lab
-would (tracking take with pose noise and dropouts, autopilot log on its own clock with a
-biased gyro); `_rawfiles` writes it as a fwid raw CSV or a Motive export plus the truth.
+Raw recordings (the raw-recording formats): `simulate_raw` flies the same vehicle and loads
+with the full nonlinear rigid-body equations (JAX, diffrax) and records the flight as a lab
+would (a tracking take with pose noise and dropouts, an autopilot log on its own clock with a
+biased gyro); `write_raw_flights` writes such flights as fwid raw CSVs or Motive exports, with
+the truth beside them.
 """
 
 from ._delfly import (

@@ -125,7 +125,7 @@ def simulate_raw(
     - `vehicle`, `flight_kw`: passed to `simulate_flight` (`input`, `start`, `effect`,
       `strength`, `form`, `drift`, ...).
 
-    **Returns:** a dict: `truth` (section-1 columns on the take's time base, noise-free,
+    **Returns:** a dict: `truth` (a flight file's columns on the take's time base, noise-free,
     loads exact, plus the pose `x y z qw qx qy qz`), `take` (`t`, `position` (n, 3) NED [m]
     and `quat` (n, 4) body -> NED with NaN rows where lost, `de dr f` measured), `onboard`
     (`t` on the autopilot clock, `de dr f p q r`), `lost` (mask), `meta` (`clock_offset_s`,

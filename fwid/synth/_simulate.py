@@ -274,7 +274,7 @@ def simulate_flight(
       always simulated and all columns written.
     - `seed`: seeds `numpy.random.default_rng` (flapping-frequency jitter, sensor noise).
     - `duration` [s], `rate` [Hz]: samples `t = 0, 1/rate, ..., duration`.
-    - `input`: `"3211"`, `"211"`, `"doublet"` or `"pulse"` (`_inputs.py`); `start` [s] is
+    - `input`: `"3211"`, `"211"`, `"doublet"` or `"pulse"` (see `make_input`); `start` [s] is
       the end of the quiet trim start, `unit` [s] the step length (default per input).
     - `amplitude` [rad]: manoeuvre amplitude (default `DEFAULT_AMPLITUDE[axis]`).
     - `noise`: scale of `NOISE` (0: noise-free), or a dict of per-channel sigmas.

@@ -1,10 +1,10 @@
 """How well an identified model matches the data, and what its dynamics are.
 
-- [`fwid.fit_metrics`][] (`_metrics.py`): RMS, RMS as % of the range, R^2 and correlation per
+- [`fwid.fit_metrics`][]: RMS, RMS as % of the range, R^2 and correlation per
   output (Tables 2, 5, 8).
-- [`fwid.eigenvalues`][], [`fwid.modes`][] (`_modes.py`): eigenvalues of `A = df/dx` and the
+- [`fwid.eigenvalues`][], [`fwid.modes`][]: eigenvalues of `A = df/dx` and the
   modes they make (Tables 3 and 6).
-- [`fwid.harmonic_amplitudes`][], `nonharmonic_share` (`_harmonics.py`): the flapping peaks'
+- [`fwid.harmonic_amplitudes`][], `nonharmonic_share`: the flapping peaks'
   heights (Figure 12) and the flapping-band energy off the harmonics (Figures 12 vs 14).
 
 The derivatives of all of these are in `fwid.sensitivity`.
