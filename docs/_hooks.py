@@ -83,27 +83,14 @@ BENCHMARKS = (
         "diagnosis_power_heldout":
             "the held-out half, seeds 1 and 3: coverage, decisiveness, false alarms, pairs",
         "diagnosis_power_dev": "the development half, on which the settings were chosen",
-        "diagnosis_power_heldout_fresh": "further held-out seeds 5 and 7, run once",
-        "diagnosis_power_heldout_fresh2": "further held-out seeds 9 and 11, run once",
-        "diagnosis_power_heldout_fresh3": "further held-out seeds 13 and 15, run once",
-        "diagnosis_power_heldout_fresh4": "further held-out seeds 17 and 19, run once",
-        "diagnosis_power_heldout_fresh5":
-            "further held-out seeds 21 and 23, run once, with the confidence set scored",
-        "diagnosis_sets_dev_subset": "the confidence set on a subset of the development half",
-        "diagnosis_sets_heldout_subset": "the confidence set on a subset of the held-out half",
         "diagnosis_family_actuator_heldout":
             "`actuator-dynamics` as a family of filters, held-out forms",
-        "diagnosis_family_actuator_heldout_before":
-            "the same cases with lags and delays only, for comparison",
         "diagnosis_family_quiet_heldout":
             "clean and out-of-catalogue cases with the family of filters",
-        "diagnosis_family_quiet_heldout_before":
-            "the same cases with lags and delays only, for comparison",
         "diagnosis": "the first withheld-effect benchmark: gap closure per effect",
     }),
     ("Diagnosis: peers", "`fwid diagnose` beside a SINDy peer on the same flights.", {
         "diagnosis_peers_heldout": "fwid and SINDy on 12 held-out cases",
-        "diagnosis_peers_heldout_noderiv": "the SINDy peer without derivative terms",
     }),
     ("Diagnosis: raw recordings",
      "The diagnosis end to end from raw tracking takes through `fwid reconstruct`.",
