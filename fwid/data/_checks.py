@@ -154,7 +154,7 @@ def check_time(name: str, t: Float[ArrayLike, " n"], lines=None) -> float:
     Steps within 0.1 % of the median step (`UNIFORM_RTOL`), or within the rounding of the
     printed time stamps, are uniform. Steps that jitter further, up to 25 % of the step
     (`JITTER`), are accepted: the loader resamples such a flight onto the uniform grid,
-    with a warning ([`fwid.data._timebase.uniform_flight`][]). A step further off (a gap of
+    with a warning (`fwid.data._timebase.uniform_flight`). A step further off (a gap of
     missing samples, a logger's pause) is refused.
     """
     t = np.asarray(t, dtype=float)

@@ -156,8 +156,13 @@ def load_flight(
     `Flight.columns` (extra columns are kept; non-numeric extra columns are dropped). The
     data are checked (see `fwid.data._checks`): any problem raises a
     [`fwid.FlightDataError`][] whose one-line message names the file, the column and the
-    lines, and says how to fix it. The time stamps, once checked to be uniform, are stored
-    as the exact uniform grid through the first and last time stamps.
+    lines, and says how to fix it: among them a time column that is not in seconds, and a
+    `vehicle.json` whose mass or inertia is 10 times or more off what the flight's load
+    columns imply (grams, g cm^2). The time stamps, once checked to be uniform, are stored
+    as the exact uniform grid through the first and last time stamps; time stamps that
+    jitter by up to 25 % of the step are resampled onto that grid, with a `UserWarning`.
+    A flight whose quiet start (before the first input) is shorter than the 0.2 s the trim
+    needs warns too, unless its sidecar gives the trim.
 
     The first input is found with [`fwid.data.first_input_index`][] on `de` or `dr`,
     whichever varies (0 when neither does). The trim is estimated with

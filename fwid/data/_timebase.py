@@ -4,8 +4,8 @@ its samples) are resampled onto the uniform grid, linearly between neighbours.
 
 The limits: a step that departs from the median step by at most `JITTER` of it is jitter;
 beyond it, a step close to a whole number of steps (within `JITTER`) holds missing samples,
-which a raw recording bridges as dropouts ([`uniform_time`][]) and a flight file may not
-hold ([`uniform_flight`][]); a step of another length, or one at or below zero, is an error.
+which a raw recording bridges as dropouts (`uniform_time`) and a flight file may not
+hold (`uniform_flight`); a step of another length, or one at or below zero, is an error.
 """
 
 from __future__ import annotations
@@ -126,9 +126,9 @@ def uniform_flight(
     name: str, t: np.ndarray, columns: Mapping[str, np.ndarray]
 ) -> tuple[np.ndarray, dict[str, np.ndarray], str | None]:
     """A checked flight file's samples on the exact uniform grid (its steps are all within
-    `JITTER` of the median step, as [`fwid.data._checks.check_time`][] ensures).
+    `JITTER` of the median step, as `fwid.data._checks.check_time` ensures).
 
-    Steps within [`uniform_tolerance`][] of the median step: the time stamps are replaced
+    Steps within `uniform_tolerance` of the median step: the time stamps are replaced
     by the grid through the first and last ones, the samples kept. Steps that jitter
     further (up to `JITTER` of the step): every column is resampled onto the grid from
     `t[0]` at the median step, linearly between neighbours, with a note saying so.
