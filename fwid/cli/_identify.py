@@ -73,6 +73,9 @@ def identify(args) -> int:
             report, figures, summary = _cycle_averaged(args, flights, validate)
     report["warnings"] = _warnings_once(report, caught)
     print(summary(report))
+    # the flights' own warnings (printed as they were read) lead the report's
+    read = [w for r in (*train, *held_out) for w in r.warnings]
+    report["warnings"] = list(dict.fromkeys([*read, *report["warnings"]]))
     if args.figures == "none":
         figures = []
     if args.out:

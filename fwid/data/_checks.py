@@ -25,6 +25,7 @@ if TYPE_CHECKING:  # jaxtyping's ArrayLike imports JAX, which reading a file nee
     from jaxtyping import ArrayLike
 
 from .._errors import FlightDataError
+from ._timebase import JITTER, time_quantum
 
 #: The columns of the flight-data format.
 KNOWN_COLUMNS = (
@@ -37,11 +38,14 @@ MIN_SAMPLES = 50
 #: ... and at least this duration [s] to be fitted.
 MIN_DURATION = 1.0
 
-#: Largest relative deviation of a time step from the typical (median) step. Deviations up
-#: to the rounding of the printed time stamps (e.g. 1e-5 s for `t` written with 5 decimals)
-#: are accepted too, as long as they stay below `UNIFORM_RTOL_MAX`.
-UNIFORM_RTOL = 1e-3
-UNIFORM_RTOL_MAX = 0.25
+#: Read as seconds, the time base of a flight has a step of at most `MAX_STEP` [s], lasts at
+#: most `MAX_DURATION` [s], and samples at least once per `MAX_BEATS_PER_STEP` wing beats
+#: (see `check_time_unit`); else its unit is one of `TIME_UNITS` (its factor to seconds).
+MAX_STEP = 0.5
+MAX_DURATION = 3600.0
+MAX_BEATS_PER_STEP = 2.5
+TIME_UNITS = {"ms": 1e3, "us": 1e6, "ns": 1e9}
+_UNIT_WORDS = {"ms": "milliseconds", "us": "microseconds", "ns": "nanoseconds"}
 
 #: Largest plausible magnitude in radians (or rad/s) of angle-like columns; beyond it the
 #: column looks like degrees (or deg/s). Pitch and roll are bounded by pi; the heading by
@@ -142,20 +146,17 @@ def check_all_finite(name: str, columns: Mapping[str, ArrayLike], t=None, lines=
     raise FlightDataError(f"{name}: columns {where} have {what}; fill or cut these samples")
 
 
-def time_quantum(t: Float[ArrayLike, " n"]) -> float:
-    """The rounding of the printed time stamps: 10**-k for the fewest decimals k that
-    reproduce `t` (0.0 when `t` is not rounded to 12 decimals or fewer)."""
-    t = np.asarray(t, dtype=float)
-    for k in range(13):
-        s = t * 10.0**k
-        if np.max(np.abs(s - np.round(s)), initial=0.0) < 1e-3:
-            return 10.0**-k
-    return 0.0
-
-
 def check_time(name: str, t: Float[ArrayLike, " n"], lines=None) -> float:
-    """`t` is strictly increasing with a uniform step; returns the typical step [s].
-    `lines`: each sample's line in the file, for the message (default: 0-based rows)."""
+    """`t` is strictly increasing with a uniform step, up to jitter; returns the typical
+    (median) step [s]. `lines`: each sample's line in the file, for the message (default:
+    0-based rows).
+
+    Steps within 0.1 % of the median step (`UNIFORM_RTOL`), or within the rounding of the
+    printed time stamps, are uniform. Steps that jitter further, up to 25 % of the step
+    (`JITTER`), are accepted: the loader resamples such a flight onto the uniform grid,
+    with a warning (`fwid.data._timebase.uniform_flight`). A step further off (a gap of
+    missing samples, a logger's pause) is refused.
+    """
     t = np.asarray(t, dtype=float)
     if t.shape[0] < 2:
         return float("nan")
@@ -170,23 +171,62 @@ def check_time(name: str, t: Float[ArrayLike, " n"], lines=None) -> float:
             "duplicates"
         )
     dt = float(np.median(d))
-    quantum = time_quantum(t)
-    tol = min(max(UNIFORM_RTOL * dt, 1.01 * quantum), UNIFORM_RTOL_MAX * dt)
-    dev = np.abs(d - dt)
-    bad = np.flatnonzero(dev > tol)
+    bad = np.flatnonzero(np.abs(d - dt) > JITTER * dt)
     if bad.size:
         j = int(bad[0])
         hint = ""
-        if quantum > UNIFORM_RTOL_MAX * dt:
+        quantum = time_quantum(t)
+        if quantum > JITTER * dt:
             hint = " (t is rounded to {:g} s: write it with more decimals)".format(quantum)
         raise FlightDataError(
             f"{name}: t is not uniformly sampled: the step from {_row(j, lines)} to "
             f"{j + 1 if lines is None else lines[j + 1]} "
             f"(t={t[j]:.6g} s) is {_g(d[j])} s but the typical step is {_g(dt)} s "
             f"({bad.size} step{'s' if bad.size > 1 else ''} off by more than "
-            f"{100 * tol / dt:.2g}%){hint}; resample the flight onto a uniform time grid"
+            f"{JITTER:.0%}, the jitter fwid resamples){hint}; resample the flight onto a "
+            "uniform time grid, or split it into flights at a gap"
         )
     return dt
+
+
+def check_time_unit(name: str, t: Float[ArrayLike, " n"], f=None) -> None:
+    """`t` is in seconds, not milliseconds, microseconds or nanoseconds.
+
+    Read as seconds, the time base of a flight must sample the flight: a step of at most
+    `MAX_STEP` (0.5 s), a duration of at most `MAX_DURATION` (an hour, beyond any
+    flapping-wing flight on one battery), and, with the flapping frequency `f` [Hz], at
+    most `MAX_BEATS_PER_STEP` wing beats between two samples (`f` below five times the
+    Nyquist frequency). A time base that fails any of these is refused, naming the unit
+    (of `TIME_UNITS`) that would make it a flight's.
+    """
+    t = np.asarray(t, dtype=float)
+    if t.shape[0] < 2:
+        return
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0:
+        return  # not increasing: check_time says so
+    span = float(t[-1] - t[0])
+    beats = None if f is None or np.size(f) == 0 else float(np.median(np.asarray(f, float)))
+
+    def fits(scale: float) -> bool:
+        step = dt / scale
+        return (step <= MAX_STEP and span / scale <= MAX_DURATION
+                and (beats is None or beats * step <= MAX_BEATS_PER_STEP))
+
+    if fits(1.0):
+        return
+    unit = next((u for u, k in TIME_UNITS.items() if fits(k) and dt / k >= 1e-5), None)
+    seen = f"read as seconds, its step is {_g(dt)} s ({_g(1 / dt)} Hz) over {_g(span)} s"
+    if beats is not None and beats * dt > MAX_BEATS_PER_STEP:
+        seen += (f", and the wings (f = {_g(beats)} Hz) would beat {beats * dt:.3g} times "
+                 "between two samples")
+    if unit is None:
+        raise FlightDataError(f"{name}: t does not look like seconds: {seen}; give t in "
+                              "seconds (fwid expects seconds)")
+    raise FlightDataError(
+        f"{name}: t looks like {_UNIT_WORDS[unit]}, not seconds: {seen}; divide t by "
+        f"{TIME_UNITS[unit]:.0f} (fwid expects seconds)"
+    )
 
 
 def check_length(name: str, t: Float[ArrayLike, " n"]) -> None:
@@ -269,8 +309,8 @@ def check_flight(
     require: Iterable[str] = (),
     lines=None,
 ) -> float:
-    """Every check, in order: columns present, finite values, time grid, length, units,
-    flapping frequency. `columns` holds every column but `t`.
+    """Every check, in order: columns present, finite values, time in seconds, time grid,
+    length, units, flapping frequency. `columns` holds every column but `t`.
 
     **Arguments:**
     - `name`: the file name, used in the messages.
@@ -290,6 +330,7 @@ def check_flight(
     check_finite(name, "t", t, None, lines)
     strict = [c for c in columns if c in KNOWN_COLUMNS or c in require]
     check_all_finite(name, {c: columns[c] for c in strict}, t, lines)
+    check_time_unit(name, t, columns.get("f"))
     dt = check_time(name, t, lines)
     check_length(name, t)
     check_units(name, {c: columns[c] for c in strict}, t)

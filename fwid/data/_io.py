@@ -11,6 +11,7 @@ imported, and `load_flights` checks every file before it builds any flight.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
@@ -21,7 +22,10 @@ from .._errors import FlightDataError
 from ._checks import check_columns, check_flight
 from ._csv import read_csv
 from ._folders import flight_files, flight_names
+from ._quiet import quiet_start_note
+from ._scale import check_vehicle_scale
 from ._sidefiles import VEHICLE_FILE, PathLike, read_sidecar, read_vehicle
+from ._timebase import uniform_flight
 from ._trim import estimate_trim, first_input_index, input_column
 
 if TYPE_CHECKING:
@@ -57,6 +61,7 @@ class FlightRecord(NamedTuple):
     vehicle: object  # a Vehicle, the dict of a vehicle.json, or None
     name: str
     path: str  # the file, as given (for messages)
+    warnings: tuple[str, ...] = ()  # what reading changed or doubts, one line each
 
 
 def _as_require(require) -> tuple[str, ...]:
@@ -83,15 +88,23 @@ def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None) -> Fl
     if t is None:
         check_columns(where, list(columns), require)  # raises: names the missing 't'
     check_flight(where, t, columns, require, lines)
+    t, columns, resampled = uniform_flight(where, t, columns)
+    notes = [resampled] if resampled else []
     n = t.shape[0]
-    t = t[0] + np.arange(n) * ((t[-1] - t[0]) / (n - 1))
 
+    vehicle_name = str(path.parent / VEHICLE_FILE)
     if vehicle is None:
         vehicle = _vehicle_beside(path)
     elif isinstance(vehicle, (str, os.PathLike)):
-        vehicle = read_vehicle(vehicle)
+        vehicle_name, vehicle = str(vehicle), read_vehicle(vehicle)
+    elif not isinstance(vehicle, dict):
+        vehicle_name = "the vehicle"
+    if vehicle is not None:
+        constants = vehicle if isinstance(vehicle, dict) else vehicle.as_dict()
+        check_vehicle_scale(vehicle_name, where, t, columns, constants)
 
     trim_given, first_given = read_sidecar(path)
+    col = input_column(columns, t)
     if first_given is not None:
         if first_given >= n:
             raise FlightDataError(
@@ -100,12 +113,17 @@ def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None) -> Fl
             )
         first = first_given
     else:
-        col = input_column(columns, t)
         first = first_input_index(t, columns[col]) if col is not None else None
-        first = 0 if first is None else first
+    if col is not None and not trim_given:
+        note = quiet_start_note(where, t, columns, col, first, str(path.with_suffix(".json")))
+        notes += [note] if note else []
+    first = 0 if first is None else first
     trim = estimate_trim(columns, t, first_input=first)
     trim.update(trim_given)
-    return FlightRecord(t, columns, trim, int(first), vehicle, name or path.name, where)
+    for note in notes:
+        warnings.warn(note, UserWarning, stacklevel=4)
+    return FlightRecord(t, columns, trim, int(first), vehicle, name or path.name, where,
+                        tuple(notes))
 
 
 def _build(raw: FlightRecord) -> Flight:
@@ -138,8 +156,13 @@ def load_flight(
     `Flight.columns` (extra columns are kept; non-numeric extra columns are dropped). The
     data are checked (see `fwid.data._checks`): any problem raises a
     [`fwid.FlightDataError`][] whose one-line message names the file, the column and the
-    lines, and says how to fix it. The time stamps, once checked to be uniform, are stored
-    as the exact uniform grid through the first and last time stamps.
+    lines, and says how to fix it: among them a time column that is not in seconds, and a
+    `vehicle.json` whose mass or inertia is 10 times or more off what the flight's load
+    columns imply (grams, g cm^2). The time stamps, once checked to be uniform, are stored
+    as the exact uniform grid through the first and last time stamps; time stamps that
+    jitter by up to 25 % of the step are resampled onto that grid, with a `UserWarning`.
+    A flight whose quiet start (before the first input) is shorter than the 0.2 s the trim
+    needs warns too, unless its sidecar gives the trim.
 
     The first input is found with [`fwid.data.first_input_index`][] on `de` or `dr`,
     whichever varies (0 when neither does). The trim is estimated with

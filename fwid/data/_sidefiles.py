@@ -61,19 +61,14 @@ def read_vehicle(path: PathLike) -> dict[str, float]:
     data = _read_json(path, "vehicle file")
     if not isinstance(data, dict):
         raise FlightDataError(f"{path}: expected a JSON object {_VEHICLE_SHAPE}")
+    missing = [key for key in _VEHICLE_KEYS if key not in data and key not in _VEHICLE_DEFAULTS]
+    if missing:
+        raise FlightDataError(f"{path}: {_missing(missing, data)}")
     values = {}
     for key in _VEHICLE_KEYS:
         if key not in data:
-            if key in _VEHICLE_DEFAULTS:
-                values[key] = _VEHICLE_DEFAULTS[key]
-                continue
-            close = [k for k in data if isinstance(k, str) and k.lower() == key.lower()]
-            fix = (
-                f"rename '{close[0]}' to '{key}'"
-                if close
-                else f"add it (expected {_VEHICLE_SHAPE})"
-            )
-            raise FlightDataError(f"{path}: missing key '{key}'; {fix}")
+            values[key] = _VEHICLE_DEFAULTS[key]
+            continue
         value = _number(data[key])
         if value is None:
             raise FlightDataError(
@@ -86,6 +81,22 @@ def read_vehicle(path: PathLike) -> dict[str, float]:
             )
         values[key] = value
     return values
+
+
+def _missing(keys: list[str], data: dict) -> str:
+    """Every missing key of `vehicle.json` in one phrase, with the fix for each: rename a key
+    that differs only in case, else add it."""
+    close = {k: next((d for d in data if isinstance(d, str) and d.lower() == k.lower()), None)
+             for k in keys}
+    renames = [f"'{c}' to '{k}'" for k, c in close.items() if c is not None]
+    adds = [f"'{k}'" for k, c in close.items() if c is None]
+    s = "s" if len(keys) > 1 else ""
+    fixes = []
+    if renames:
+        fixes.append("rename " + ", ".join(renames))
+    if adds:
+        fixes.append(f"add {', '.join(adds)} (expected {_VEHICLE_SHAPE})")
+    return f"missing key{s} {', '.join(repr(k) for k in keys)}; {' and '.join(fixes)}"
 
 
 def read_sidecar(path: Path) -> tuple[dict[str, float], int | None]:

@@ -23,8 +23,9 @@ INPUT_COLUMNS = ("de", "dr")
 #: Length [s] of the moving-average window that smooths the input (applied twice).
 SMOOTH_WINDOW = 0.2
 
-#: Length [s] of the initial window that gives the input's initial level and noise, and of
-#: the fallback quiet start used when no input is found or it starts earlier than this.
+#: Length [s] of the initial window that gives the input's initial level and noise, and the
+#: shortest quiet start the trim is taken from: when no input is found or it starts earlier
+#: than this, the trim is the mean of the first `QUIET_WINDOW` seconds.
 QUIET_WINDOW = 0.2
 
 
@@ -138,9 +139,15 @@ class _Input:
         # the input's steps), times the gain of the smoothing kernel.
         box = _box(self.period) if self.period is not None else np.ones(1)
         d2 = np.diff(np.convolve(x, box, mode="valid"), 2)
-        sigma_w = _robust_std(d2) / float(np.linalg.norm(np.convolve([1.0, -2.0, 1.0], box)))
+        self.sigma_w = _robust_std(d2) / float(np.linalg.norm(np.convolve([1.0, -2.0, 1.0], box)))
         kernel = _box(self.w)
-        self.sigma = sigma_w * float(np.linalg.norm(np.convolve(kernel, kernel)))
+        self.sigma = self.sigma_w * float(np.linalg.norm(np.convolve(kernel, kernel)))
+
+    def threshold(self, n_sigma: float, frac: float, sigma: float | None = None) -> float:
+        """A departure from the initial level: more than `n_sigma` times the noise (`sigma`,
+        default that of the smoothed input) and more than `frac` of the smoothed range."""
+        sigma = self.sigma if sigma is None else sigma
+        return max(n_sigma * sigma, frac * float(self.y.max() - self.y.min()), self.tiny)
 
     def excitation(self) -> float:
         """Largest smoothed excursion from the initial level, in units of its noise."""
@@ -233,7 +240,7 @@ def first_input_index(
     if a.peak <= a.tiny or a.peak <= min_snr * a.sigma:
         return None
     y, dev = a.y, a.dev
-    thr = max(n_sigma * a.sigma, frac * float(y.max() - y.min()), a.tiny)
+    thr = a.threshold(n_sigma, frac)
     above = np.flatnonzero(np.abs(dev) > thr)
     if above.size == 0:
         return None
@@ -270,6 +277,19 @@ def input_column(columns: Mapping[str, ArrayLike], t: Float[ArrayLike, " n"]) ->
     return present[int(np.argmax(scores))]
 
 
+def trim_window(t: Float[ArrayLike, " n"], first_input: int | None,
+                quiet: float = QUIET_WINDOW) -> int:
+    """The number of samples the trim is the mean of: those before `first_input` when they
+    last at least `quiet` seconds, else the first `quiet` seconds (see `estimate_trim`)."""
+    t = np.asarray(t, dtype=float)
+    n = t.shape[0]
+    stop = _window(t, quiet) if n else 0
+    if first_input is not None and n and first_input < n:
+        if t[first_input] - t[0] >= quiet * (1 - 1e-9) and first_input >= stop:
+            stop = int(first_input)
+    return max(1, min(stop, n))
+
+
 def estimate_trim(
     flight_columns: Mapping[str, ArrayLike],
     t: Float[ArrayLike, " n"],
@@ -280,9 +300,13 @@ def estimate_trim(
     """The trim (linearisation point): the mean of every column over the quiet start.
 
     The quiet start is the samples before the first input (found with
-    [`fwid.data.first_input_index`][] on `de` or `dr`, whichever varies). When no input
-    column exists, the input does not vary, or the quiet start is shorter than `quiet`
-    seconds, the first `quiet` seconds are used instead.
+    [`fwid.data.first_input_index`][] on `de` or `dr`, whichever varies). It must last at
+    least `quiet` seconds (0.2 s, `QUIET_WINDOW`: 40 samples at 200 Hz, two to three wing
+    beats of the DelFly, whose ripple the mean then averages out). When no input column
+    exists, the input does not vary, or the quiet start is shorter than that, the first
+    `quiet` seconds are used instead; reading a flight whose quiet start is too short warns
+    ([`fwid.data.load_flight`][]), and its sidecar `NAME.json` can give the trim instead:
+    `{"trim": {"u0": .., "w0": .., "theta0": ..}}`.
 
     **Arguments:**
     - `flight_columns`: the flight's columns by name (`t` may be included; it is skipped).
@@ -294,17 +318,11 @@ def estimate_trim(
     columns with no finite mean over the quiet start are left out.
     """
     t = np.asarray(t, dtype=float)
-    n = t.shape[0]
     if first_input is None:
         col = input_column(flight_columns, t)
         if col is not None:
             first_input = first_input_index(t, flight_columns[col], quiet=quiet)
-    n_quiet = _window(t, quiet) if n else 0
-    stop = n_quiet
-    if first_input is not None and n and first_input < n:
-        if t[first_input] - t[0] >= quiet * (1 - 1e-9) and first_input >= n_quiet:
-            stop = int(first_input)
-    stop = max(1, min(stop, n))
+    stop = trim_window(t, first_input, quiet)
     trim = {}
     for name, values in flight_columns.items():
         if name == "t":

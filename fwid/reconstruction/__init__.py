@@ -20,7 +20,7 @@ The modules:
   Motive's time base from its frame numbers and its length unit when unsaid (`_frames.py`,
   `_units.py`); held poses, orientation flips and position jumps dropped (`_glitches.py`).
 - A lab's own files through a recording map (`_map.py`, [`fwid.read_map`][]; read by
-  `_mapped.py`), time stamps made uniform (`_timebase.py`), the pose's convention checked
+  `_mapped.py`), time stamps made uniform (`fwid.data._timebase`), the pose's convention checked
   against the onboard accelerometer and gyro (`_imu.py`), the flapping frequency of a
   tracking-only take from the pose's ripple (`_ripple.py`).
 - Smoothing (JAX): a linear Kalman filter and Rauch-Tung-Striebel smoother with

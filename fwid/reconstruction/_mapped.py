@@ -1,6 +1,6 @@
 """A lab's own recording read through its recording map (`_map.py`) into a `RawTake`.
 
-The take is a CSV file with one header row. Its time base is made uniform (`_timebase`),
+The take is a CSV file with one header row. Its time base is made uniform (`fwid.data._timebase`),
 its pose turned into north-east-down with body axes forward-right-down; the autopilot's
 columns (in the take itself, or in a log of its own on its own clock) give the controls
 through the map's affine maps and the onboard sensors in body axes and SI units. When the
@@ -24,7 +24,7 @@ from ._raw import (
 from ._rotations import (
     continuous_sign, euler_to_matrix_ordered, matrix_to_quat, quat_to_matrix, to_ned,
 )
-from ._timebase import onto_grid, uniform_time
+from ..data._timebase import onto_grid, uniform_time
 
 #: Standard gravity (m/s^2): an accelerometer's g.
 G0 = 9.80665

@@ -14,7 +14,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._errors import FlightDataError, InputError
-from ..data._checks import UNIFORM_RTOL, UNIFORM_RTOL_MAX, time_quantum
+from ..data._timebase import uniform_tolerance
 from ..models._greybox import GreyBoxModel
 
 
@@ -41,7 +41,7 @@ def check_time_axis(t: Float[ArrayLike, " n"], name: str = "Experiment") -> None
     if not (np.isfinite(t).all() and dt > 0):
         raise FlightDataError(f"{name}: t must be finite and increasing; t[0] = {t[0]:.6g}, "
                               f"t[1] = {t[1]:.6g}")
-    tol = min(max(UNIFORM_RTOL * dt, 1.01 * time_quantum(t)), UNIFORM_RTOL_MAX * dt)
+    tol = uniform_tolerance(t, dt)
     bad = np.flatnonzero(~(np.abs(d - dt) <= tol))
     if bad.size:
         j = int(bad[0])

@@ -2,6 +2,7 @@
 (issue 14): every file is read and checked with numpy first, the one-line message and exit
 code 2 as before."""
 
+import json
 import subprocess
 import sys
 
@@ -85,6 +86,45 @@ def test_bad_input_exits_2_without_jax(tmp_path, good, case):
         assert w in err[0], err[0]
     assert not jax, "JAX was imported before the bad input was answered"
     assert seconds < 5.0  # in-process time to the answer (well under 1 s on an idle machine)
+
+
+def _scale_time(factor):
+    def edit(header, rows):
+        j = header.index("t")
+        for r in rows:
+            r[j] = repr(float(r[j]) * factor)
+        return header, rows
+    return edit
+
+
+@pytest.mark.parametrize("factor, unit", [(1e3, "milliseconds"), (1e6, "microseconds")])
+def test_time_not_in_seconds_exits_2_within_3_s(tmp_path, good, factor, unit):
+    path = _copy(tmp_path, good, _scale_time(factor))
+    proc, jax, seconds = _run("identify", str(path), "--model", "lon", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0], proc.stderr
+    assert f"t looks like {unit}" in err[0] and "divide t by" in err[0]
+    assert not jax and seconds < 3.0
+
+
+def test_vehicle_in_grams_exits_2(tmp_path, good):
+    path = _copy(tmp_path, good, lambda h, r: (h, r))
+    vehicle = json.loads((path.parent / "vehicle.json").read_text())
+    (path.parent / "vehicle.json").write_text(json.dumps({**vehicle,
+                                                          "mass": vehicle["mass"] * 1e3}))
+    proc, jax, seconds = _run("identify", str(path), "--model", "lon", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and str(path.parent / "vehicle.json") in err[0], proc.stderr
+    assert "'mass'" in err[0] and "looks like grams" in err[0] and not jax
+
+
+def test_vehicle_missing_keys_at_once(tmp_path, good):
+    path = _copy(tmp_path, good, lambda h, r: (h, r))
+    (path.parent / "vehicle.json").write_text('{"mass": 0.02, "Iy": 1e-5}')
+    proc, jax, _ = _run("identify", str(path), "--model", "lon", cwd=tmp_path)
+    assert proc.returncode == 2 and "missing keys 'Ix', 'Iz'" in proc.stderr, proc.stderr
 
 
 def test_column_lists_match_the_models():

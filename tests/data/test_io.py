@@ -200,6 +200,16 @@ def test_bad_vehicle(tmp_path, content, match):
     assert str(path) in str(info.value)
 
 
+def test_every_missing_vehicle_key_at_once(tmp_path):
+    path = write_json(tmp_path / "vehicle.json", {"Mass": 0.02, "Iy": 2e-5})
+    with pytest.raises(FlightDataError) as info:
+        load_vehicle(path)
+    assert str(info.value) == (
+        f"{path}: missing keys 'mass', 'Ix', 'Iz'; rename 'Mass' to 'mass' and add 'Ix', "
+        """'Iz' (expected {"mass": kg, "Ix": kg m^2, "Iy": .., "Iz": .., "Ixz": .., """
+        """"g": 9.81})""")
+
+
 def test_bad_vehicle_found_beside_flight(tmp_path):
     path = write_flight(tmp_path, vehicle={"mass": 0.02, "Ix": 1, "Iy": 2})
     with pytest.raises(FlightDataError, match=r"vehicle\.json: missing key 'Iz'"):
