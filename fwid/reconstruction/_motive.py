@@ -33,6 +33,7 @@ from ._rotations import (
     continuous_sign, euler_to_matrix_ordered, matrix_to_quat, quat_to_matrix, to_ned,
 )
 from ._units import length_unit
+from ._wings import wing_frequency
 
 LOG_COLUMNS = ("t", "de", "dr", "f", "p", "q", "r")
 #: The rotation orders of Motive's Euler exports.
@@ -155,21 +156,19 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
     warnings += said
     pos = pos * scale
     tracked = np.all(np.isfinite(rot), axis=1) & np.all(np.isfinite(pos), axis=1)
-    if euler:
-        R = euler_to_matrix_ordered(np.deg2rad(np.where(tracked[:, None], rot, 0.0)), euler)
-    else:
-        q = rot[:, [3, 0, 1, 2]]
-        check_quaternions(q, tracked, t, path, _FIRST_DATA_LINE)
-        safe = np.where(tracked[:, None], q, [1.0, 0, 0, 0])
-        R = quat_to_matrix(safe / np.linalg.norm(safe, axis=1, keepdims=True))
+    R = _matrices(rot, tracked, euler, t, path)
     pos, R = to_ned(pos, R, frame)
+    flap = _wings(data, t, kind, names, group, comp, body, euler, frame, R, tracked, path)
+    if flap is not None:
+        warnings.append(flap[1])
     q = continuous_sign(np.where(tracked[:, None], matrix_to_quat(R), np.nan), tracked)
     kept, said = drop_glitches(t, q, tracked, pos, path)
     warnings += said
-    cut = trim_untracked(t, pos, q, kept, {"dropped": tracked & ~kept})
+    cut = trim_untracked(t, pos, q, kept, {"dropped": tracked & ~kept},
+                         None if flap is None else {"f": flap[0]})
     if cut is None:
         raise FlightDataError(f"{path}: rigid body {body!r} is tracked on fewer than 3 rows")
-    t, pos, q, tracked, extra = cut
+    t, pos, q, tracked, extra, controls = cut
     gaps = dropouts(t, tracked, path, max_dropout, extra["dropped"])
     name = take_name(path)
     if onboard is False:
@@ -182,7 +181,41 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
                             "alone, no controls")
     rotation = f"{euler} Euler" if euler else "quaternion"
     return RawTake(name, path, f"Motive CSV export (body {body}, {frame}, {units}, {rotation})",
-                   frame, t, pos, q, tracked, None, log, gaps, warnings)
+                   frame, t, pos, q, tracked, controls, log, gaps, warnings)
+
+
+def _matrices(rot, tracked, euler, t, path):
+    """Body -> world matrices of a rigid body's rotation columns (a quaternion X Y Z W, or
+    Euler angles in degrees in the header's order), the identity where it is not tracked."""
+    if euler:
+        return euler_to_matrix_ordered(np.deg2rad(np.where(tracked[:, None], rot, 0.0)), euler)
+    q = rot[:, [3, 0, 1, 2]]
+    check_quaternions(q, tracked, t, path, _FIRST_DATA_LINE)
+    safe = np.where(tracked[:, None], q, [1.0, 0, 0, 0])
+    return quat_to_matrix(safe / np.linalg.norm(safe, axis=1, keepdims=True))
+
+
+def _wings(data, t, kind, names, group, comp, body, euler, frame, R, tracked, path):
+    """The flapping frequency from the take's wing rigid bodies (`_wings`), or None."""
+    angles = "XYZ" if euler else "XYZW"
+    wings = {}
+    for w in dict.fromkeys(n for k, n in zip(kind, names) if k == "Rigid Body" and n):
+        if w == body or "wing" not in w.lower():
+            continue
+        cols = {c.upper(): i for i, (k, n, g, c) in enumerate(zip(kind, names, group, comp))
+                if k == "Rigid Body" and n == w and g == "Rotation"}
+        if not all(c in cols for c in angles):
+            continue
+        rot = np.stack([data[:, cols[c]] for c in angles], 1)
+        ok = np.all(np.isfinite(rot), axis=1)
+        if ok.sum() < 3:
+            continue
+        _, Rw = to_ned(np.zeros((len(t), 3)), _matrices(rot, ok, euler, t, path), frame)
+        wings[w] = (Rw, ok)
+    if not wings:
+        return None
+    f, note = wing_frequency(t, R, tracked, wings)
+    return None if f is None else (f, note)
 
 
 def read_onboard(path, take: str, given: bool = False) -> OnboardLog | None:

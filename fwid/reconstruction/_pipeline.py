@@ -276,13 +276,13 @@ def _align(take: RawTake, w, sigma, clock_offset, min_overlap, f):
 
 
 def _flapping(take: RawTake):
-    """The flapping frequency (Hz) on the take's samples: logged (the controls' `f`, the
-    autopilot log's median), else from the pose's ripple (NaN where there is none), and a
-    note when it was not logged."""
-    if take.controls is not None and "f" in take.controls:
-        return take.controls["f"], None
+    """The flapping frequency (Hz) on the take's samples: logged (the autopilot log's
+    median, the take's own `f` column), else from its tracked wings, else from the pose's
+    ripple (NaN where there is none), and a note when it was not logged."""
     if take.onboard is not None and "f" in take.onboard.columns:
         return np.full(len(take.t), np.median(take.onboard.columns["f"])), None
+    if take.controls is not None and "f" in take.controls:  # the take's own, or its wings'
+        return take.controls["f"], None
     f, note = flapping_frequency(take.t, take.quat, take.tracked)
     return (np.full(len(take.t), np.nan) if f is None else f), note
 
@@ -332,6 +332,8 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             say(f"{f.name}: failed (below)")
         else:
             s, cols, clock = aligned[i]
+            if "f" not in cols and np.isfinite(fs[i]).any():  # a log without f: the take's
+                cols["f"] = fs[i][s]
             stage.append((i, s, cols, clock, att0[i]))
     # 2. attitude with the gyro, about the first pass's attitude; translation
     with_gyro = [st for st in stage if _gyro(st)]
