@@ -50,8 +50,10 @@ def blocks(text: str, lang: str, name: str = "page") -> tuple[list[str], list[st
 
 
 def _commands(block: str) -> list[str]:
-    """The block's commands, one a line (trailing `# comments` are bash's own)."""
-    return [line for line in block.splitlines() if line.strip() and not line.lstrip().startswith("#")]
+    """The block's commands, one a line (a trailing backslash continues it; trailing
+    `# comments` are bash's own)."""
+    lines = block.replace("\\\n", " ").splitlines()
+    return [line for line in lines if line.strip() and not line.lstrip().startswith("#")]
 
 
 def test_markers_are_read():
@@ -99,7 +101,8 @@ def _exec_page(path: Path, code: list[str], folder: Path) -> dict:
             try:
                 exec(compile(block, f"{path.name} python block {i + 1}", "exec"), namespace)
             except Exception as e:  # name the block, for the page's author
-                raise AssertionError(f"{path.name} python block {i + 1} fails: {e!r}\n{block}") from e
+                raise AssertionError(
+                    f"{path.name} python block {i + 1} fails: {e!r}\n{block}") from e
     finally:
         os.chdir(cwd)
         import matplotlib.pyplot as plt
