@@ -103,21 +103,32 @@ def sensor_arrays(sensors: dict) -> tuple[np.ndarray | None, np.ndarray | None]:
     return acc, gyro
 
 
-def _compare(t, a, b, ok, f_flap, centre):
-    """Cycle averages of sensor `a` and pose `b` `(n, 3)` where both are good (means removed
-    when `centre`): relative error energy and correlations per axis."""
-    good = ok & np.all(np.isfinite(a), 1)
+def _averaged(t, a, b, ok, f_flap, centre):
+    """Cycle averages of sensor `a` and pose `b` `(n, 3)` on the rows where both are good
+    (means removed when `centre`), or None with fewer than 20 such rows."""
+    good = ok & np.all(np.isfinite(a), 1) & np.all(np.isfinite(b), 1)
     if good.sum() < 20:
         return None
     a = cycle_average(t, _filled(a, good), f_flap)[good]
     b = cycle_average(t, _filled(b, good), f_flap)[good]
     if centre:
         a, b = a - a.mean(0), b - b.mean(0)
+    return a, b
+
+
+def _stats(a, b):
+    """Relative error energy of `b` against `a`, and per axis the correlations and rms."""
     energy = float(np.sum((a - b) ** 2) / max(np.sum(a**2), 1e-12))
     corr = [float(np.corrcoef(a[:, i], b[:, i])[0, 1]) if np.std(a[:, i]) * np.std(b[:, i]) > 0
             else 0.0 for i in range(3)]
     rms = [float(v) for v in np.sqrt(np.mean((a - b) ** 2, 0))]
     return energy, corr, rms
+
+
+def _compare(t, a, b, ok, f_flap, centre):
+    """`_stats` of the cycle averages of sensor `a` and pose `b` (`_averaged`), or None."""
+    ab = _averaged(t, a, b, ok, f_flap, centre)
+    return None if ab is None else _stats(*ab)
 
 
 def _score(t, f, w, ok, acc, gyro, f_flap):
@@ -191,15 +202,11 @@ def frame_from_gyro(t, rates, gyro, frame: str, f_flap=None) -> tuple[str, list[
     scored against the gyro (bias removed, cycle-averaged) as in `choose_convention`.
 
     **Returns:** `(frame, correlations per axis)` of the supported frame, or None."""
-    ok = np.all(np.isfinite(rates), 1) & np.all(np.isfinite(gyro), 1)
-    scores = {}
-    for g in FRAMES:
-        D = FRAMES[frame] @ FRAMES[g].T
-        r = _compare(t, gyro, rates @ D, ok, f_flap, centre=True)
-        if r is not None:
-            scores[g] = r
-    if frame not in scores:
+    ab = _averaged(t, gyro, rates, np.ones(len(t), bool), f_flap, centre=True)
+    if ab is None:
         return None
+    # the cycle average is linear: averaged once, relabelled per frame
+    scores = {g: _stats(ab[0], ab[1] @ (FRAMES[frame] @ FRAMES[g].T)) for g in FRAMES}
     best = min(scores, key=lambda g: scores[g][0])
     if best == frame or scores[frame][0] <= (1 + TIE) * scores[best][0] \
             or max(scores[best][1]) < AGREE:
