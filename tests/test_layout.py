@@ -10,13 +10,14 @@ PACKAGE = Path(__file__).resolve().parents[1] / "fwid"
 
 # data -> reconstruction -> decomposition -> models -> simulation -> estimate -> validate /
 # sensitivity -> design -> identification -> diagnosis -> report -> cli. `synth` (the embedded
-# simulator) stands beside `data`, on its own; `_errors` and `_jax_setup` are the ground floor.
-STAGES = ["_errors", "_jax_setup", "data", "reconstruction", "decomposition", "models",
-          "simulation", "estimate", "validate", "sensitivity", "design", "identification",
+# simulator) stands beside `data`, on its own; `_errors`, `_jax_setup` and the message
+# helpers `_words` and `_advice` are the ground floor.
+STAGES = ["_errors", "_jax_setup", "_words", "_advice", "data", "reconstruction",
+          "decomposition", "models", "simulation", "estimate", "validate", "sensitivity", "design", "identification",
           "diagnosis", "report", "cli"]
 RANK = {s: i for i, s in enumerate(STAGES)}
 RANK["synth"] = RANK["data"]
-RANK["_jax_setup"] = RANK["_errors"] = 0
+RANK["_jax_setup"] = RANK["_errors"] = RANK["_words"] = RANK["_advice"] = 0
 MAX_LINES = 500
 
 

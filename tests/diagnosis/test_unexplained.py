@@ -78,7 +78,7 @@ def test_gusts_are_a_random_disturbance(effect_flights, tmp_path):
     text = diagnosis_summary(d)
     assert "coloured errors in user-supplied states" not in text
     assert (f"states: {len(d.train) + len(d.test)} of {len(d.train) + len(d.test)} flights "
-            "rebuilt from raw recordings by fwid reconstruct; clock offsets 0.500 to 0.500 s; "
+            "rebuilt from raw recordings by fwid reconstruct; clock offset 0.500 s; "
             "no warnings") in text
     # the evidence of process noise: the baseline fitted by filter error (Jategaonkar Ch. 5)
     write_diagnosis(d, tmp_path)
