@@ -138,8 +138,9 @@ def parser() -> argparse.ArgumentParser:
                         "smoothed states and loads (the guide's 'Formats and interfaces' page, "
                         "docs/reference/formats.md)", formatter_class=fmt)
     rc.add_argument("raw", nargs="+", metavar="RAW",
-                    help="raw takes: fwid raw CSVs or Motive CSV exports, or folders of them "
-                    "(their top-level *.csv, not *.onboard.csv)")
+                    help="raw takes: fwid raw CSVs, Motive CSV exports, or a lab's own logs "
+                    "read through --map; or folders of them (their top-level *.csv and "
+                    "*.csv.gz, not *.onboard.csv)")
     rc.add_argument("--out", required=True, help="folder for the flights, vehicle.json, "
                     "reconstruction.json and one figure per take")
     rc.add_argument("--body", default=None, help="the Motive rigid body's name (needed when the "
