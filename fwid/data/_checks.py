@@ -223,10 +223,8 @@ def check_time_unit(name: str, t: Float[ArrayLike, " n"], f=None) -> None:
     if unit is None:
         raise FlightDataError(f"{name}: t does not look like seconds: {seen}; give t in "
                               "seconds (fwid expects seconds)")
-    raise FlightDataError(
-        f"{name}: t looks like {_UNIT_WORDS[unit]}, not seconds: {seen}; divide t by "
-        f"{TIME_UNITS[unit]:.0f} (fwid expects seconds)"
-    )
+    raise FlightDataError(f"{name}: t looks like {_UNIT_WORDS[unit]}, not seconds: {seen}; "
+                          f"divide t by {TIME_UNITS[unit]:.0f} (fwid expects seconds)")
 
 
 def check_length(name: str, t: Float[ArrayLike, " n"]) -> None:

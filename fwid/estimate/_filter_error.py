@@ -245,7 +245,7 @@ def fit_filter_error(
     if progress:
         print(f"fwid: fitting {model.name} by filter error to {', '.join(names)} ...",
               flush=True)
-    steps, last, change = 0, None, float("nan")
+    steps, last, change, moved = 0, None, float("nan"), 0
     rise_max = 0.01 * float(jnp.sum(batch.mask)) * batch.z.shape[-1]
     halvings, alt = 0, None  # F-compensation halvings; (theta, Rk) before the compensation
     for outer in range(1, max_outer + 1):
@@ -271,6 +271,7 @@ def fit_filter_error(
             theta = theta.at[p:].set(0.5 * (theta[p:] + alt[0][p:]))
             continue
         last, halvings = out, 0
+        moved += int(out["accepted"])
         theta = out["theta"]
         R_new = out["R"]
         change = float(jnp.max(jnp.abs(jnp.diag(R_new) / jnp.diag(Rk) - 1)))
@@ -289,7 +290,10 @@ def fit_filter_error(
         theta = theta.at[p:].set(jnp.asarray(f))
         Rk = R_new
     theta = last["theta"]
-    converged = np.isfinite(change) and change <= outer_rtol
+    # the relaxation settled, and the Gauss-Newton passes moved the estimates at all (a fit
+    # whose every step failed from the start leaves R as it was: a stall, not convergence)
+    converged = (np.isfinite(change) and change <= outer_rtol
+                 and (moved > 0 or bool(last["converged"])))
     cov = covariance(out["M"])
     std = jnp.sqrt(jnp.abs(jnp.diag(cov)))
     v = out["v"]

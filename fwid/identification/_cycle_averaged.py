@@ -172,7 +172,9 @@ def identify(
     _say_missing_forces(model, list(flights) + list(validate))
     loops = [closed_loop_test(f, model.inputs[0], model.states, cutoff)
              for f in flights] if model.inputs else []
-    notes = [w for w in [closed_loop_warning(loops, model.name)] if w is not None]
+    # the warning is output error's: the other methods follow the measured states
+    notes = [w for w in [closed_loop_warning(loops, model.name)]
+             if w is not None and method == "output-error"]
     for w in notes:
         warnings.warn(w, FitWarning, stacklevel=2)
     exps = [averaged(f, model, cutoff, noise_cutoff) for f in flights]

@@ -34,10 +34,15 @@ def read_fwid_raw(path: str, lines: list[str], frame: str = "ned",
         euler = [c for c in header if c.lower() in _EULER]
         if euler and any(c.startswith("q") for c in missing):
             raise FlightDataError(
-                f"{path}: attitude given as Euler angles ({', '.join(euler)}); fwid needs the "
-                "attitude quaternion: export columns qw qx qy qz (body -> Earth, scalar first)")
+                f"{path}: attitude given as Euler angles ({', '.join(euler)}); read the file "
+                "through a recording map that names its columns, units and Euler order "
+                "(--map MAP.toml, the guide's page 'Your lab's recordings'), or export the "
+                "quaternion qw qx qy qz (body -> Earth, scalar first)")
         raise FlightDataError(f"{path}: missing column(s) {', '.join(missing)}; a fwid raw CSV "
-                              "has t,x,y,z,qw,qx,qy,qz,de,dr,f (the guide's page on recordings)")
+                              "has t,x,y,z,qw,qx,qy,qz,de,dr,f (the guide's page on raw "
+                              "recordings); a file with columns of its own is read through a "
+                              "recording map (--map MAP.toml, the guide's page 'Your lab's "
+                              "recordings')")
     data = parse_rows(lines[1:], path, 2, width=len(header))
     col = {h: data[:, i] for i, h in enumerate(header) if h}
     t = col["t"]

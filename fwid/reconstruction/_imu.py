@@ -84,6 +84,7 @@ def naive_motion(t: np.ndarray, pos: np.ndarray, R: np.ndarray, tracked: np.ndar
 
     dt = float(np.median(np.diff(t)))
     win = max(SG_ORDER + 2, int(round(SG_WINDOW / dt)) | 1)
+    win = min(win, (len(t) - 1) | 1 if len(t) % 2 == 0 else len(t))  # a short take: all of it
     p = _filled(pos, tracked)
     a = savgol_filter(p, win, SG_ORDER, deriv=2, delta=dt, axis=0, mode="interp")
     Rf = np.where(tracked[:, None, None], R, np.eye(3))
@@ -139,6 +140,44 @@ def _score(t, f, w, ok, acc, gyro, f_flap):
         if r is not None:
             score, corr = score + r[0], corr + r[1]
     return score, corr
+
+
+#: The sensors' scale against the pose's is judged within this factor either way.
+SCALE_FACTOR = 3.0
+
+
+def check_scales(t, pos, R, tracked, sensors, m, path: str, g: float = 9.80665,
+                 f_flap: float | None = None) -> None:
+    """Refuse mapped sensors whose unit is off: averaged over the flapping cycle, an
+    accelerometer on a vehicle in flight or at rest reads about `g`, and a gyro's rates are
+    as large as the pose's (both sizes the same in any frame and axes). Outside
+    `SCALE_FACTOR` either way, a `FlightDataError` names the map's key and the unit the
+    numbers look like."""
+    acc, gyro = sensor_arrays(sensors)
+    if acc is not None:
+        ok = np.all(np.isfinite(acc), 1)
+        if ok.sum() >= 20:
+            size = float(np.median(np.linalg.norm(cycle_average(t, _filled(acc, ok), f_flap)[ok],
+                                                  axis=1)))
+            ratio = size / g
+            if not 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
+                unit = ('acc_unit = "g"' if ratio < 1 else 'acc_unit = "m/s2"')
+                raise FlightDataError(
+                    f"{path}: the accelerometer reads {size:.3g} m/s^2 averaged over the flight "
+                    f"with the map's acc_unit, where a vehicle in flight or at rest reads about "
+                    f"g ({g:.3g}): its unit looks wrong; try {unit} in [onboard] of {m.path}")
+    if gyro is not None:
+        _, w, ok = naive_motion(t, pos, R, tracked, g)
+        ok = ok & np.all(np.isfinite(gyro), 1)
+        if ok.sum() >= 20:
+            a = np.sqrt(np.mean(np.sum(gyro[ok] ** 2, 1)))
+            b = np.sqrt(np.mean(np.sum(w[ok] ** 2, 1)))
+            ratio = a / b if b > 0 else np.inf
+            if not 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
+                unit = 'gyro_unit = "deg/s"' if ratio > 1 else 'gyro_unit = "rad/s"'
+                raise FlightDataError(
+                    f"{path}: the gyro's rates are {ratio:.3g} times the pose's with the map's "
+                    f"gyro_unit; try {unit} in [onboard] of {m.path}")
 
 
 def choose_convention(t, pos, R, tracked, sensors, default: Convention, *, attitude=None,

@@ -204,8 +204,10 @@ def read_map(path) -> RecordingMap:
         quaternion = _choice(path, "tracking", tr, "quaternion", QUATERNION_ORDERS, "wxyz")
     inputs = {}
     for k, v in inp.items():
-        if not isinstance(v, dict) or "column" not in v or set(v) - {"column", "offset", "scale"}:
-            raise _fail(path, f"[inputs] {k}", "write { column = \"NAME\" (or a list), "
+        extra = sorted(set(v) - {"column", "offset", "scale"}) if isinstance(v, dict) else []
+        if not isinstance(v, dict) or "column" not in v or extra:
+            what = f"unknown key {extra[0]!r}; " if extra else ""
+            raise _fail(path, f"[inputs] {k}", what + "write { column = \"NAME\" (or a list), "
                         "offset = 0.0, scale = 1.0 }")
         inputs[k] = Control(_columns(path, "inputs", v, "column", range(1, 9)),
                             _number(path, f"[inputs] {k}.offset", v.get("offset", 0.0)),

@@ -14,9 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import FlightDataError
+from ..data._checks import check_time_unit
 from ._glitches import drop_glitches
-from ._imu import Convention, choose_convention
-from ._map import RecordingMap
+from ._imu import Convention, check_scales, choose_convention
+from ._map import TIME_UNITS, RecordingMap
 from ._raw import (
     MAX_DROPOUT, OnboardLog, RawTake, check_quaternions, dropouts, parse_rows, read_lines,
     take_name, trim_untracked,
@@ -52,9 +53,13 @@ def read_table(path, lines: list[str] | None = None):
 def _pick(cols: dict, names, path, m: RecordingMap) -> np.ndarray:
     missing = [c for c in names if c not in cols]
     if missing:
-        have = ", ".join(list(cols)[:12]) + (", ..." if len(cols) > 12 else "")
-        raise FlightDataError(f"{path}: no column {', '.join(repr(c) for c in missing)}, which "
-                              f"the map {m.path} names (the file has {have}); fix the map")
+        import difflib
+
+        near = {c: difflib.get_close_matches(c, list(cols), n=1) for c in missing}
+        said = ", ".join(f"{c!r}" + (f" (did you mean {near[c][0]!r}?)" if near[c] else "")
+                         for c in missing)
+        raise FlightDataError(f"{path}: no column {said}, which the map {m.path} names (the "
+                              f"file has {', '.join(cols)}); fix the map")
     return np.stack([cols[c] for c in names], -1)
 
 
@@ -63,6 +68,38 @@ def _time(cols, path, m: RecordingMap, column, scale):
     if column is None and m.frame_column is not None:
         return _pick(cols, [m.frame_column], path, m)[:, 0] / m.frame_rate
     return _pick(cols, [column], path, m)[:, 0] * scale
+
+
+def _check_time_unit(t, path, m: RecordingMap) -> None:
+    """Refuse a time base that is not a flight's in seconds under the map's `[time] unit`,
+    naming the unit that makes it one (`fwid.data`'s rule)."""
+    if m.time_column is None or _is_seconds(t):
+        return
+    raw = t / m.time_scale
+    fits = [u for u, k in TIME_UNITS.items() if _is_seconds(raw * k)]
+    now = next(u for u, k in TIME_UNITS.items() if k == m.time_scale)
+    fix = (f"set [time] unit = \"{fits[0]}\" in {m.path}" if fits else
+           f"check [time] column and unit in {m.path}")
+    step = float(np.median(np.diff(t)))
+    raise FlightDataError(f"{path}: with [time] unit = \"{now}\" the samples are {step:.3g} s "
+                          f"apart over {t[-1] - t[0]:.3g} s, not a flight's time base; {fix}")
+
+
+#: The fastest sample rate a recording is taken to have (Hz): tracking systems and autopilot
+#: logs run at most a few kHz.
+MAX_RATE = 1e4
+
+
+def _is_seconds(t) -> bool:
+    """Whether the time stamps `t`, read as seconds, are a flight's (`fwid.data`'s rule, and
+    no faster than `MAX_RATE`)."""
+    if len(t) > 1 and float(np.median(np.diff(t))) < 1.0 / MAX_RATE:
+        return False
+    try:
+        check_time_unit("", t)
+    except FlightDataError:
+        return False
+    return True
 
 
 def mapped_controls(cols, path, m: RecordingMap, g: float = G0) -> dict[str, np.ndarray]:
@@ -80,6 +117,17 @@ def mapped_controls(cols, path, m: RecordingMap, g: float = G0) -> dict[str, np.
         w = _pick(cols, m.gyro, path, m) * m.gyro_scale * axes
         out.update(zip(("p_gyro", "q_gyro", "r_gyro"), w.T))
     return out
+
+
+def _check_radians(att, path, m: RecordingMap) -> None:
+    """Euler angles said to be in radians whose roll or pitch goes beyond pi (no attitude
+    has one) are degrees: refused, naming the map's key."""
+    rp = np.abs(att[:, :2])
+    rp = rp[np.isfinite(rp)]
+    if rp.size and np.mean(rp > np.pi + 1e-6) > 0.001:
+        raise FlightDataError(f"{path}: the roll and pitch reach {np.max(rp):.4g} with the map's "
+                              f"attitude_unit = \"rad\", beyond pi: they look like degrees; "
+                              f"set attitude_unit = \"deg\" in [tracking] of {m.path}")
 
 
 def _attitude_matrices(att, m: RecordingMap, path):
@@ -111,6 +159,7 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     """
     cols, notes = read_table(path, lines)
     t = _time(cols, path, m, m.time_column, m.time_scale)
+    _check_time_unit(t, path, m)
     grid, how, more = uniform_time(t, path, 2, m.time_column or m.frame_column)
     notes += more
     pos = _pick(cols, m.position, path, m) * m.position_scale
@@ -119,6 +168,8 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
         ok = np.all(np.isfinite(att), 1)
         q = att if m.quaternion == "wxyz" else att[:, [3, 0, 1, 2]]
         check_quaternions(q, ok, t, path, 2)
+    if m.euler is not None and m.angle_scale == 1.0:
+        _check_radians(att, path, m)
     R, ok_att = _attitude_matrices(att, m, path)
     seen = ok_att & np.all(np.isfinite(pos), 1)
     # glitches (held poses, flips, jumps) are the same in any frame: dropped before the check
@@ -128,6 +179,8 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     sensors = mapped_controls(cols, path, m) if m.log_is_take else {}
     convention = Convention(frame or m.frame, (1.0, 1.0, 1.0), m.axes)
     if m.log_is_take and ("acc_x" in sensors or "p_gyro" in sensors):
+        check_scales(t, pos, R, tracked, sensors, m, path,
+                     f_flap=float(np.nanmedian(sensors["f"])) if "f" in sensors else None)
         attitude = None
         if m.euler is not None:
             attitude = lambda signs: _attitude_matrices(att * np.array(signs), m, path)[0]  # noqa: E731

@@ -78,6 +78,9 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
         log = read_mapped_log(onboard or m.log_path(path), m, path)
         notes = [] if log is not None else [f"no autopilot log ({m.log_path(path).name}): "
                                             "no controls, the pose alone"]
+        if m.position is not None:
+            notes.append(f"the map's [tracking] is not used: a Motive export holds its own "
+                         f"pose (the rigid body's columns)")
         return take._replace(onboard=log, warnings=take.warnings + notes)
     if m is not None and m.position is not None:
         return read_mapped(str(path), m, frame=frame, strict_frame=strict_frame,

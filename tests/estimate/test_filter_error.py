@@ -216,3 +216,25 @@ def test_filter_error_with_bias_terms_per_flight():
     assert float(per.flight_model(1).params["bz"]) == float(per.theta[per.names.index("bz@1")])
     assert "bz" in shared.names and "bz@0" not in shared.names
     assert per.cost < shared.cost
+
+
+def test_a_fit_that_never_moves_is_not_converged(monkeypatch):
+    """Gauss-Newton passes whose every step fails leave the estimates at the start: that is a
+    stall, however settled R looks, and the result says so (the same flight converges when
+    the steps go through)."""
+    from fwid.estimate import _filter_error
+
+    e = _turbulent_flight()
+    start = _model(Lp=-3.0, Lr=0.5, Lda=-7.0, Np=-0.3, Nr=-1.2, Ndr=-2.0)
+    real = _filter_error._inner
+
+    def stalled(model, theta0, batch, Rk, **kw):
+        out = dict(real(model, theta0, batch, Rk, **kw))
+        out.update(theta=theta0, accepted=0, converged=False)
+        return out
+
+    monkeypatch.setattr(_filter_error, "_inner", stalled)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fem = fwid.fit(start, e, start="model", method="filter-error")
+    assert not bool(fem.converged)

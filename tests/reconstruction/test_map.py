@@ -152,3 +152,20 @@ def test_cli_with_map_and_tracking_only(tmp_path, motion, capsys):
     assert main(["reconstruct", str(take), "--map", str(tmp_path / "none.toml"), "--out",
                  str(tmp_path / "x")]) == 2
     assert "none.toml: no such file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("change, words", [
+    (('acc_unit = "g"', 'acc_unit = "m/s2"'), ['acc_unit = "g"', "about g"]),
+    (('unit = "ms"', 'unit = "s"'), ['set [time] unit = "ms"']),
+    (('attitude_unit = "deg"', 'attitude_unit = "rad"'), ['attitude_unit = "deg"', "beyond pi"]),
+    (('"servo"', '"serv"'), ["'serv' (did you mean 'servo'?)"]),
+])
+def test_a_slip_in_the_map_is_named_with_its_fix(tmp_path, motion, change, words):
+    """A unit or column the data contradict is refused in one line naming the map's key and
+    the value that fits (an accelerometer in g read as m/s^2 would otherwise flip the frame
+    the sensors check)."""
+    take = write_lab_take(tmp_path / "a.csv", motion, T)
+    with pytest.raises(FlightDataError) as e:
+        read_raw(take, recording_map=_map(tmp_path, MAP.replace(*change)))
+    msg = str(e.value)
+    assert "\n" not in msg and all(w in msg for w in words), msg
