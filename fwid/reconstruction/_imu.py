@@ -42,6 +42,10 @@ CUTOFF_FRACTION = 0.4
 TIE = 0.25
 #: The best candidate agrees when its correlation reaches this on some axis.
 AGREE = 0.5
+#: Standard gravity (m/s^2): an accelerometer's g.
+G0 = 9.80665
+#: The sensors' axes -> forward-right-down.
+SENSOR_TO_FRD = {"frd": np.ones(3), "flu": np.array([1.0, -1.0, -1.0])}
 ACC = ("acc_x", "acc_y", "acc_z")
 GYRO = ("p_gyro", "q_gyro", "r_gyro")
 #: Savitzky-Golay window of the naive derivatives (s) and polynomial order.
@@ -132,21 +136,11 @@ def _compare(t, a, b, ok, f_flap, centre):
     return None if ab is None else _stats(*ab)
 
 
-def _score(t, f, w, ok, acc, gyro, f_flap):
-    """Summed relative error energy of the sensors against the pose, and the correlations."""
-    score, corr = 0.0, []
-    for s, mine, centre in ((acc, f, False), (gyro, w, True)):  # a gyro's bias: not the pose's
-        r = None if s is None else _compare(t, s, mine, ok, f_flap, centre)
-        if r is not None:
-            score, corr = score + r[0], corr + r[1]
-    return score, corr
-
-
 #: The sensors' scale against the pose's is judged within this factor either way.
 SCALE_FACTOR = 3.0
 
 
-def check_scales(t, pos, R, tracked, sensors, m, path: str, g: float = 9.80665,
+def check_scales(t, pos, R, tracked, sensors, m, path: str, g: float = G0,
                  f_flap: float | None = None) -> None:
     """Refuse mapped sensors whose unit is off: averaged over the flapping cycle, an
     accelerometer on a vehicle in flight or at rest reads about `g`, and a gyro's rates are
@@ -181,7 +175,7 @@ def check_scales(t, pos, R, tracked, sensors, m, path: str, g: float = 9.80665,
 
 
 def choose_convention(t, pos, R, tracked, sensors, default: Convention, *, attitude=None,
-                      path: str, strict: bool = False, g: float = 9.80665,
+                      path: str, strict: bool = False, g: float = G0,
                       f_flap: float | None = None):
     """The pose convention the onboard sensors support (module docstring).
 
@@ -195,18 +189,35 @@ def choose_convention(t, pos, R, tracked, sensors, default: Convention, *, attit
     **Returns:** `(convention, warning or "")`.
     """
     acc, gyro = sensor_arrays(sensors)
-    flip = np.array([1.0, -1.0, -1.0])
+    # the rows a sensor and the pose both hold do not depend on the candidate (the pose's
+    # are the tracking's), nor do the sensors' cycle averages: each averaged once, its axes
+    # relabelled per candidate
+    ok = naive_motion(t, pos, R, tracked, g)[2]
+    here = []  # (which pose signal, its rows, the sensor's cycle average, centred)
+    for i, s_, centre in ((0, acc, False), (1, gyro, True)):  # a gyro's bias: not the pose's
+        if s_ is None:
+            continue
+        good = ok & np.all(np.isfinite(s_), 1)
+        if good.sum() >= 20:
+            here.append((i, good, cycle_average(t, _filled(s_, good), f_flap)[good], centre))
     results = {}
     for signs in (list(product((1.0, -1.0), repeat=3)) if attitude is not None else [(1.0,) * 3]):
         Rs = R if signs == (1.0, 1.0, 1.0) else attitude(signs)
         for frame in FRAMES:
             p_ned, R_ned = to_ned(pos, Rs, frame)
-            f, w, ok = naive_motion(t, p_ned, R_ned, tracked, g)
-            for axes in ("frd", "flu"):
-                k = 1.0 if axes == default.sensor_axes else flip
-                results[Convention(frame, signs, axes)] = _score(
-                    t, f, w, ok, None if acc is None else acc * k,
-                    None if gyro is None else gyro * k, f_flap)
+            fw = naive_motion(t, p_ned, R_ned, tracked, g)[:2]
+            mine = [cycle_average(t, _filled(fw[i], good), f_flap)[good]
+                    for i, good, _, _ in here]
+            for axes in SENSOR_TO_FRD:
+                k = SENSOR_TO_FRD[axes] * SENSOR_TO_FRD[default.sensor_axes]
+                score, corr = 0.0, []
+                for b, (_, _, a, centre) in zip(mine, here):
+                    a = a * k
+                    if centre:
+                        a, b = a - a.mean(0), b - b.mean(0)
+                    energy, c, _ = _stats(a, b)
+                    score, corr = score + energy, corr + c
+                results[Convention(frame, signs, axes)] = (score, corr)
     best = min(results, key=lambda c: results[c][0])
     best_score, best_corr = results[best]
     if not best_corr or max(best_corr) < AGREE:

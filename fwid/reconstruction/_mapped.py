@@ -11,27 +11,23 @@ A Motive export (a map without `[tracking]`) keeps Motive's reader for the pose.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from .._errors import FlightDataError
 from ..data._checks import check_time_unit
 from ._glitches import drop_glitches
-from ._imu import Convention, check_scales, choose_convention
+from ._imu import G0, SENSOR_TO_FRD, Convention, check_scales, choose_convention
 from ._map import TIME_UNITS, RecordingMap
 from ._raw import (
     MAX_DROPOUT, OnboardLog, RawTake, check_quaternions, dropouts, parse_rows, read_lines,
     take_name, trim_untracked,
 )
 from ._rotations import (
-    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, quat_to_matrix, to_ned,
+    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, to_ned, tracked_matrices,
 )
 from ..data._timebase import onto_grid, uniform_time
-
-#: Standard gravity (m/s^2): an accelerometer's g.
-G0 = 9.80665
-#: The sensors' axes -> forward-right-down.
-SENSOR_TO_FRD = {"frd": np.ones(3), "flu": np.array([1.0, -1.0, -1.0])}
-
 
 def read_table(path, lines: list[str] | None = None):
     """A CSV file with one header row: `(columns, warnings)`, `columns` a dict of arrays
@@ -138,9 +134,7 @@ def _attitude_matrices(att, m: RecordingMap, path):
         R = euler_to_matrix_ordered(np.where(ok[:, None], att * m.angle_scale, 0.0), m.euler)
         return R, ok
     q = att if m.quaternion == "wxyz" else att[:, [3, 0, 1, 2]]
-    return quat_to_matrix(np.where(ok[:, None], q, [1.0, 0, 0, 0])
-                          / np.linalg.norm(np.where(ok[:, None], q, [1.0, 0, 0, 0]), axis=1,
-                                           keepdims=True)), ok
+    return tracked_matrices(q, ok), ok
 
 
 def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
@@ -178,13 +172,13 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     notes += said
     sensors = mapped_controls(cols, path, m) if m.log_is_take else {}
     convention = Convention(frame or m.frame, (1.0, 1.0, 1.0), m.axes)
-    if m.log_is_take and ("acc_x" in sensors or "p_gyro" in sensors):
-        check_scales(t, pos, R, tracked, sensors, m, path,
-                     f_flap=float(np.nanmedian(sensors["f"])) if "f" in sensors else None)
+    checked = "acc_x" in sensors or "p_gyro" in sensors
+    if checked:
+        f_flap = float(np.nanmedian(sensors["f"])) if "f" in sensors else None
+        check_scales(t, pos, R, tracked, sensors, m, path, f_flap=f_flap)
         attitude = None
         if m.euler is not None:
             attitude = lambda signs: _attitude_matrices(att * np.array(signs), m, path)[0]  # noqa: E731
-        f_flap = float(np.nanmedian(sensors["f"])) if "f" in sensors else None
         convention, note = choose_convention(t, pos, R, tracked, sensors, convention,
                                              attitude=attitude, path=path, strict=strict_frame,
                                              f_flap=f_flap)
@@ -210,8 +204,7 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
         notes += [note] if note else []
     # the controls' own gaps (a log's empty cells) end the take where they start or stop it
     if sensors:
-        have = np.all(np.isfinite(np.stack(list(sensors.values()), 1)), 1)
-        tracked = tracked & have if not np.all(have) else tracked
+        tracked = tracked & np.all(np.isfinite(np.stack(list(sensors.values()), 1)), 1)
     cut = trim_untracked(t, pos, q, tracked, sensors, {"dropped": seen & ~tracked})
     if cut is None:
         raise FlightDataError(f"{path}: the pose is complete on fewer than 3 rows")
@@ -227,7 +220,6 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
         log = read_mapped_log(m.log_path(path), m, path)
     source = (f"recording map {m.path} ({convention.frame}"
               + (f", Euler {m.euler}" if m.euler else "") + ")")
-    checked = m.log_is_take and ("acc_x" in sensors or "p_gyro" in sensors)
     return RawTake(take_name(path), str(path), source, convention.frame, t, pos, q, tracked,
                    sensors if m.log_is_take else None, log, gaps, notes,
                    convention if checked else None)
@@ -255,8 +247,6 @@ def _flapping_span(t, tracked, f):
 def read_mapped_log(path, m: RecordingMap, take) -> OnboardLog | None:
     """The autopilot's log of its own (on its own clock) through the map: its time column
     and the mapped controls and sensors; None (no controls) when there is no such file."""
-    from pathlib import Path
-
     if not Path(path).is_file():
         return None
     cols, _ = read_table(path)

@@ -30,7 +30,7 @@ from ._raw import (
     read_lines, take_name, trim_untracked,
 )
 from ._rotations import (
-    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, quat_to_matrix, to_ned,
+    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, to_ned, tracked_matrices,
 )
 from ._units import length_unit
 from ._wings import wing_frequency
@@ -191,8 +191,7 @@ def _matrices(rot, tracked, euler, t, path):
         return euler_to_matrix_ordered(np.deg2rad(np.where(tracked[:, None], rot, 0.0)), euler)
     q = rot[:, [3, 0, 1, 2]]
     check_quaternions(q, tracked, t, path, _FIRST_DATA_LINE)
-    safe = np.where(tracked[:, None], q, [1.0, 0, 0, 0])
-    return quat_to_matrix(safe / np.linalg.norm(safe, axis=1, keepdims=True))
+    return tracked_matrices(q, tracked)
 
 
 def _wings(data, t, kind, names, group, comp, body, euler, frame, R, tracked, path):

@@ -253,7 +253,7 @@ def _align(take: RawTake, w, sigma, clock_offset, min_overlap, f):
         s, cols = _cut(take, clock, min_overlap)
         return s, cols, clock._replace(given=given)
     gyro = np.stack([log.columns[c] for c in "pqr"], 1)
-    f0 = float(np.nanmedian(log.columns["f"] if "f" in log.columns else f))
+    f0 = float(np.nanmedian(f))  # the log's median f where it has one (`_flapping`)
     clock = find_offset(take.t, w, log.t, gyro, f0,
                         given=clock_offset, min_overlap=min_overlap, sigma=sigma)
     if clock is None:
@@ -320,8 +320,7 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     for i, (f, take, veh, vpath) in enumerate(ok):
         if take.onboard is None:
             cols = dict(take.controls or {})
-            if "f" not in cols and np.isfinite(fs[i]).any():
-                cols["f"] = fs[i]
+            cols.setdefault("f", fs[i])
             for k in "pqr":  # columns p q r of a fwid raw CSV are not a gyro; a map's are
                 cols.pop(k, None)
                 if f"{k}_gyro" in cols:
@@ -332,33 +331,30 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             say(f"{f.name}: failed (below)")
         else:
             s, cols, clock = aligned[i]
-            if "f" not in cols and np.isfinite(fs[i]).any():  # a log without f: the take's
-                cols["f"] = fs[i][s]
+            cols.setdefault("f", fs[i][s])  # a log without f: the take's
             stage.append((i, s, cols, clock, att0[i]))
     # 2. attitude with the gyro, about the first pass's attitude; translation
     with_gyro = [st for st in stage if _gyro(st)]
     att1 = _attitude([ok[i][1] for i, *_ in with_gyro],
                      [ok[i][1].quat[s] for i, s, *_ in with_gyro],
                      [ok[i][1].tracked[s] for i, s, *_ in with_gyro],
-                     [_f(c, len(ok[i][1].t[s])) for i, s, c, _, _ in with_gyro],
+                     [c["f"] for _, _, c, _, _ in with_gyro],
                      gyros=[np.stack([c[k] for k in "pqr"], 1) for _, _, c, _, _ in with_gyro],
                      gmasks=[np.ones(len(c["f"]), bool) for _, _, c, _, _ in with_gyro],
                      starts=[a.R[s] for _, s, _, _, a in with_gyro],
                      params=[a.params for *_, a in with_gyro], passes=[1] * len(with_gyro))
     gyro_att = {st[0]: a for st, a in zip(with_gyro, att1)}
-    stage_of = {st[0]: st for st in stage}
-    final_att = {i: _shrunk(gyro_att.get(i, a0), _f(c, len(ok[i][1].t[s])), ok[i][1].dt,
-                            ok[i][1].tracked[s])
+    final_att = {i: _shrunk(gyro_att.get(i, a0), c["f"], ok[i][1].dt, ok[i][1].tracked[s])
                  for i, s, c, _, a0 in stage}
     trans = _translation([ok[i][1] for i, *_ in stage], [ok[i][1].pos[s] for i, s, *_ in stage],
                          [ok[i][1].tracked[s] for i, s, *_ in stage],
-                         [_f(c, len(ok[i][1].t[s])) for i, s, c, _, _ in stage],
+                         [c["f"] for _, _, c, _, _ in stage],
                          [final_att[i] for i, *_ in stage])
     for (i, s, cols, clock, _), tr in zip(stage, trans):
         f, take, veh, vpath = ok[i]
         try:
             att = final_att[i]
-            flights[i] = _assemble(take, s, cols, clock, att, tr, veh, vpath, _gyro(stage_of[i]))
+            flights[i] = _assemble(take, s, cols, clock, att, tr, veh, vpath)
             e = flights[i].entry
             off = f", clock offset {e['clock_offset_s']:.4f} s" if clock is not None else ""
             say(f"{take.name}: {len(flights[i].columns['t'])} samples at {e['rate_hz']:.4g} Hz"
@@ -376,13 +372,13 @@ def _gyro(stage) -> bool:
     return all(k in stage[2] for k in "pqr")
 
 
-def _f(cols, n):
-    """The flapping frequency of a staged take (NaN: none)."""
-    return cols["f"] if "f" in cols else np.full(n, np.nan)
-
-
-def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath, has_gyro) -> ReconstructedFlight:
+def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> ReconstructedFlight:
+    """A staged take's flight: `cols` holds the controls, `f` (NaN where the take shows no
+    flapping: then no `f` column) and the gyro `p q r` when it has one."""
     t = take.t[s]
+    if not np.isfinite(cols["f"]).any():
+        cols = {k: v for k, v in cols.items() if k != "f"}
+    has_gyro = all(k in cols for k in "pqr")
     V, dV, eul = body_states(att.R, tr.vel, tr.acc, att.w)
     XYZ, LMN = rigid_body_loads(V, dV, att.w, att.a, att.R, veh)
     check_frame(XYZ / veh["mass"], veh["g"], take)

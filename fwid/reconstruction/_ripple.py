@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._rotations import log_so3, quat_to_matrix
+from ._rotations import log_so3, tracked_matrices
 
 #: The band searched for the flapping line (Hz).
 BAND = (4.0, 40.0)
@@ -29,8 +29,7 @@ TRACK = 0.3
 
 
 def _rates(t, quat, tracked):
-    q = np.where(tracked[:, None], quat, [1.0, 0, 0, 0])
-    R = quat_to_matrix(q / np.linalg.norm(q, axis=1, keepdims=True))
+    R = tracked_matrices(quat, tracked)
     dt = float(np.median(np.diff(t)))
     w = log_so3(np.swapaxes(R[:-1], -1, -2) @ R[1:]) / dt
     ok = tracked[:-1] & tracked[1:]

@@ -27,6 +27,13 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     ], -2)
 
 
+def tracked_matrices(q: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Rotation matrices `(n, 3, 3)` of quaternions `(n, 4)` `[w, x, y, z]`, normalised, the
+    identity on the rows that are not `ok` (lost: whatever they hold)."""
+    safe = np.where(ok[:, None], q, [1.0, 0.0, 0.0, 0.0])
+    return quat_to_matrix(safe / np.linalg.norm(safe, axis=1, keepdims=True))
+
+
 def matrix_to_quat(R: np.ndarray) -> np.ndarray:
     """Unit quaternions `[w, x, y, z]` (w >= 0) of rotation matrices `(..., 3, 3)`
     (Shepperd's method: the largest of the four squared components first)."""
