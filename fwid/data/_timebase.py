@@ -15,6 +15,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .._errors import FlightDataError
+from .._words import count
 
 #: A step within this fraction of the median step is jitter (resampled), and a step within
 #: it of a whole number of median steps holds missing samples.
@@ -101,7 +102,7 @@ def uniform_time(t: np.ndarray, path: str, first_line: int, what: str = "time"):
         notes.append(_jitter_note(jitter, dt))
     missing = int(np.sum(k[k > 1] - 1))
     if missing:
-        notes.append(f"{missing} sample{'s' if missing != 1 else ''} missing from the time "
+        notes.append(f"{count(missing, 'sample')} missing from the time "
                      "stamps; bridged as dropouts")
     return grid, (left, frac), notes
 
