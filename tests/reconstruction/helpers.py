@@ -13,6 +13,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+#: Real recordings nobody on this project wrote, beside the repository (its SOURCES.md).
+REAL = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 VEHICLE = {"mass": 0.0177, "Ix": 8.2e-5, "Iy": 9.6e-5, "Iz": 2.2e-4, "Ixz": -3.0e-5, "g": 9.81}
 F0 = 12.0
 C_YUP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # y-up -> NED

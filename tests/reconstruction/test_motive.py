@@ -2,8 +2,6 @@
 `Length Units`, Euler angles in each rotation order, the old layout; and the real five-body
 export in `../shared/realdata/`."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -11,11 +9,10 @@ from fwid import FlightDataError
 from fwid.cli import main
 from fwid.reconstruction import read_raw
 
-from .helpers import Motion, noisy, write_motive
+from .helpers import REAL, Motion, noisy, write_motive
 
 RATE = 120.0
 T = np.arange(0, 4, 1 / RATE)
-REAL = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 
 
 @pytest.fixture(scope="module")

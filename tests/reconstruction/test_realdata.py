@@ -9,7 +9,8 @@ import pytest
 
 import fwid
 
-REAL = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
+from .helpers import REAL
+
 FLIGHT = REAL / "fd_model_tuning_level_flight_1.csv.gz"
 MAP = Path(__file__).resolve().parents[2] / "docs" / "guide" / "flapper.toml"
 VEHICLE = {"mass": 0.103, "Ix": 3.2e-4, "Iy": 4.9e-4, "Iz": 3.5e-4, "Ixz": 0.0, "g": 9.81}
