@@ -83,6 +83,16 @@ def confidence_set_line(d: Diagnosis) -> str | None:
     return line
 
 
+def _manoeuvre_text(tm: dict) -> str:
+    """The held-out error in the manoeuvres against steady flight (`by_time` of the gap map),
+    or that the flights hold no steady flight to compare with: the control moves from their
+    first sample on (a closed-loop flight, or flights cut after their first input)."""
+    ratio = tm["manoeuvre_to_steady"]
+    if not np.isfinite(ratio):
+        return "no steady flight before the first input to compare the manoeuvres with"
+    return f"{ratio:.1f}x as large in the manoeuvres as in steady flight"
+
+
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
@@ -98,8 +108,7 @@ def diagnosis_summary(d: Diagnosis) -> str:
         (f"fwid diagnose ({d.axis}): {len(d.train)} training, {len(d.test)} test flights, "
         f"{len(d.folds)} scoring blocks"),
         f"  where the model misses: most in {worst}, {bands[top_band]:.0f} % of its held-out "
-        f"error at {_band_label(top_band)}; {tm['manoeuvre_to_steady']:.1f}x as large in the "
-        "manoeuvres as in steady flight"
+        f"error at {_band_label(top_band)}; " + _manoeuvre_text(tm)
         + (f"; growing with {st['top']} ({st['top_spread']:.1f}x across its range)"
            if st["top"] else ""),
     ]

@@ -1,0 +1,22 @@
+"""The diagnosis summary in words, on flights that start in their manoeuvre."""
+
+import math
+
+import fwid
+from fwid.report import diagnosis_summary
+from fwid.synth import write_flights
+
+
+def test_flights_without_a_steady_start_say_so_not_nan(tmp_path):
+    """Flights whose control moves from their first sample (closed-loop flights, or flights
+    cut after their first input, as the real Flapper's) have no steady flight for the gap
+    map's time split: the summary says so instead of printing 'nanx as large'."""
+    def cut(folder, seed):
+        write_flights(tmp_path / folder, 2, "lon", seed=seed, effect="none")
+        return [f.slice(f.first_input) for f in fwid.load_flights(tmp_path / folder)]
+
+    d = fwid.diagnose(cut("train", 1), cut("test", 2), simulation=False)
+    assert all(math.isnan(t["manoeuvre_to_steady"]) for t in d.localisation["by_time"].values())
+    text = diagnosis_summary(d)
+    assert "nan" not in text.lower()
+    assert "no steady flight before the first input" in text
