@@ -100,4 +100,9 @@ def test_real_flapper_notebook_runs(tmp_path):
         if ": correlation x " in line:  # the cycle-averaged accelerometer follows the pose
             assert float(line.split("correlation x ")[1].split(",")[0]) > 0.85, line
     assert "closed loop True" in text and "F_q" in text  # process noise: filter error
-    assert len(images) >= 1
+    # the diagnosis, one flight to train and the other to test, then swapped; whatever its
+    # verdict, each split has one, and whether they agree is computed
+    assert text.count("VERDICT: ") == 2 and text.count("=== train ") == 2
+    assert "the two splits agree on the verdict: " in text
+    assert "nanx as large" not in text  # no steady flight: said in words
+    assert len(images) >= 3  # the accelerometer, the two gap maps
