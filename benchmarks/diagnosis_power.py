@@ -17,8 +17,11 @@ and test flights), a noise scale U(0.5, 2), a flight length U(2.5, 8) s, a sampl
 one of them for every flight) and the axis (among those whose manoeuvre shows the form).
 
 **Split**: forms of even index (0, 2) with even seeds are the `dev` half, forms of odd index
-(1, 3) with odd seeds the `heldout` half, and the forms in `HELDOUT_ONLY` (the direction-dependent
-and lag-plus-delay actuators) are in the `heldout` half only; clean and out-of-catalogue cases
+(1, 3) with odd seeds the `heldout` half, and the forms in `HELDOUT_ONLY` (at least one per
+family: the direction-dependent, lag-plus-delay, saturating and backlash actuators, saturating
+and one-sided aerodynamic nonlinearities, a Wagner-like lag, one modulated flapping harmonic, a
+gyroscopic coupling, a resynchronised clock and a saturating thrust-frequency law) are in the
+`heldout` half only; clean and out-of-catalogue cases
 split by seed parity. Choose thresholds on `dev`, report `heldout` only.
 
 Per case: write the flights blind (sidecars deleted, `diagnosis._write`), `fwid.diagnose`,
@@ -59,7 +62,13 @@ INPUTS = ("cycle", "3211", "211", "doublet", "pulse")
 HALVES = ("dev", "heldout")
 #: Forms in the held-out half only, whatever their index: members of a family that the
 #: development half never shows (the family, not a form, must generalise).
-HELDOUT_ONLY = {"actuator-dynamics": ("asymmetric", "lag-delay")}
+HELDOUT_ONLY = {"actuator-dynamics": ("asymmetric", "lag-delay", "saturation", "backlash"),
+                "nonlinear-aero": ("saturation", "one-sided"),
+                "unsteady-aero": ("wagner",),
+                "flap-coupling": ("harmonic",),
+                "lon-lat-coupling": ("gyroscopic",),
+                "time-offset": ("resync",),
+                "flap-frequency": ("saturating",)}
 
 
 def _rng(case_key: str, seed: int):

@@ -22,6 +22,23 @@ def test_halves_share_no_form_and_no_seed():
     assert len(more) > len(held) and all(c in more for c in held)
 
 
+def test_held_out_only_forms_never_reach_the_development_half():
+    """Every catalogue family has a form the development half never shows, alone or in a
+    pair; the held-out half shows each of them."""
+    from fwid.synth import EFFECTS, FORMS
+
+    assert set(dp.HELDOUT_ONLY) == set(EFFECTS[1:])
+    only = {(e, f) for e, fs in dp.HELDOUT_ONLY.items() for f in fs}
+    assert all(f in FORMS[e] for e, f in only)
+
+    def shown(cs):
+        return {(e, f) for c in cs for e, f in zip(c["effect"].split("+"), c["form"].split("+"))}
+
+    assert not shown(dp.cases("dev")) & only
+    held = dp.cases("heldout")
+    assert only <= shown([c for c in held if c["kind"] == "single"])
+
+
 def test_slice_runs_blind_and_is_summarised(tmp_path):
     cases = dp.cases("dev")
     pick = [next(c for c in cases if c["kind"] == "single" and c["n"] == 4
