@@ -1,6 +1,7 @@
 """Summary of `diagnosis_power.py` results: power vs strength per effect and flight count,
 false alarms on clean and out-of-catalogue flights, the confusion matrix, two-effect
-both-named rate (Markdown), and the power curves (PNG)."""
+both-named rate, the SINDy peer beside fwid on the same cases (Markdown), and the power
+curves (PNG)."""
 
 from __future__ import annotations
 
@@ -227,6 +228,84 @@ def set_table(results) -> list[str]:
     return out
 
 
+#: The peers a results file may hold beside fwid (a record's key, the row's name).
+PEERS = {"sindy": "SINDy (pysindy)"}
+
+
+def peer_right(r: dict, who: str) -> bool | None:
+    """Whether peer `who` got case `r` right, as `right` scores fwid (pairs: both effects among
+    the families it keeps); `None` without its verdict."""
+    p = r.get(who) or {}
+    if "verdict" not in p:
+        return None
+    if r["kind"] == "single":
+        return p["verdict"] == r["effect"]
+    if r["kind"] == "clean":
+        return p["verdict"] == "none"
+    if r["kind"] == "out":
+        return p["verdict"] in NOT_NAMED
+    return set(r["effect"].split("+")) <= set(p.get("kept") or [])
+
+
+def peer_table(results) -> list[str]:
+    """fwid's row and each peer's on the same cases (those both answered): single effects at
+    strength 1 with 6+6 flights (verdict right; the truth held: fwid's confidence set covers
+    it, the peer keeps it among its families; decisive: nothing else kept), the same with 4+4,
+    pairs (both named), false alarms (a catalogue name as the verdict of a clean or
+    out-of-catalogue case), and the wall time per case."""
+    out = []
+    for who, label in PEERS.items():
+        both = [r for r in results if "verdict" in r and peer_right(r, who) is not None]
+        if not both:
+            continue
+        out += ["| method | single s=1 6+6: right | holds the truth | decisive | single s=1 4+4: "
+                "right | pairs: both named | false alarms (clean + out) | wall s per case "
+                "(median, mean) |", "|---|---|---|---|---|---|---|---|"]
+
+        def frac(rows, ok):
+            return f"{sum(map(ok, rows))}/{len(rows)}" if rows else "-"
+
+        def sel(kind, n=None):
+            return [r for r in both if r["kind"] == kind and (n is None or r["n"] == n)
+                    and (kind != "single" or r["strength"] == 1.0)]
+
+        s6, s4, pr = sel("single", 6), sel("single", 4), sel("pair")
+        quiet = [r for r in both if r["kind"] in ("clean", "out")]
+
+        def fwid_holds(r):
+            s = set_score(r)
+            return bool(s and s["covered"])
+
+        def fwid_decisive(r):
+            s = set_score(r)
+            return bool(s and s["decisive"])
+
+        def kept(r):
+            return r[who].get("kept") or []
+
+        def walls(vals):
+            vals = sorted(vals)
+            return (f"{vals[len(vals) // 2]:.1f}, {sum(vals) / len(vals):.1f}" if vals else "-")
+
+        rows = {
+            "fwid": (lambda r: bool(right(r)), fwid_holds, fwid_decisive,
+                     lambda r: r["verdict"] not in NOT_NAMED, [r["wall_s"] for r in both
+                                                                if "wall_s" in r]),
+            label: (lambda r: bool(peer_right(r, who)), lambda r: r["effect"] in kept(r),
+                    lambda r: kept(r) == [r["effect"]],
+                    lambda r: r[who]["verdict"] not in NOT_NAMED,
+                    [r[who]["wall_s"] for r in both if "wall_s" in r[who]]),
+        }
+        for name, (ok, holds, decisive, alarm, wall) in rows.items():
+            out.append(f"| {name} | {frac(s6, ok)} | {frac(s6, holds)} | {frac(s6, decisive)} | "
+                       f"{frac(s4, ok)} | {frac(pr, ok)} | {frac(quiet, alarm)} | "
+                       f"{walls(wall)} |")
+        failed = sum(1 for r in results if "verdict" in r and "error" in (r.get(who) or {}))
+        out += ["", f"{len(both)} cases with both verdicts (the same flights for both)"
+                + (f"; the peer failed on {failed}" if failed else "") + "."]
+    return out or ["(no peer ran: `--no-peer`)"]
+
+
 def figure(results, path: Path) -> None:
     import matplotlib
 
@@ -284,6 +363,7 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "", "## Two effects at once", "", *pairs(results), "",
           "## Spurious further effects", "", *extras(results), "",
           "## The confidence set of explanations", "", *set_table(results), "",
+          "## A peer beside fwid (the same flights)", "", *peer_table(results), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
     stem.with_suffix(".md").write_text(_provenance.markdown(text))

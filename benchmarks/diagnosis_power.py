@@ -17,23 +17,28 @@ and test flights), a noise scale U(0.5, 2), a flight length U(2.5, 8) s, a sampl
 one of them for every flight) and the axis (among those whose manoeuvre shows the form).
 
 **Split**: forms of even index (0, 2) with even seeds are the `dev` half, forms of odd index
-(1, 3) with odd seeds the `heldout` half, and the forms in `HELDOUT_ONLY` (the direction-dependent
-and lag-plus-delay actuators) are in the `heldout` half only; clean and out-of-catalogue cases
+(1, 3) with odd seeds the `heldout` half, and the forms in `HELDOUT_ONLY` (at least one per
+family: the direction-dependent, lag-plus-delay, saturating and backlash actuators, saturating
+and one-sided aerodynamic nonlinearities, a Wagner-like lag, one modulated flapping harmonic, a
+gyroscopic coupling, a resynchronised clock and a saturating thrust-frequency law) are in the
+`heldout` half only; clean and out-of-catalogue cases
 split by seed parity. Choose thresholds on `dev`, report `heldout` only.
 
 Per case: write the flights blind (sidecars deleted, `diagnosis._write`), `fwid.diagnose`,
-one JSON line in `results/diagnosis_power_{half}.jsonl`; then the summary
-`diagnosis_power_{half}.md` and the power curves `diagnosis_power_{half}.png`
-(`_power_summary.py`).
+then the SINDy peer (`peers/sindy.py`, unless `--no-peer`) on the same flights, timed each;
+one JSON line in `results/diagnosis_power_{half}.jsonl` (the peer's verdict, kept families
+and wall time under `sindy`); then the summary `diagnosis_power_{half}.md` (with the peer's
+row beside fwid's) and the power curves `diagnosis_power_{half}.png` (`_power_summary.py`).
 
     python benchmarks/diagnosis_power.py --half dev [--seeds 2] [--workers 1] [--limit N]
-        [--subset kind=single effect=flap-coupling ...] [--out benchmarks/results]
+        [--subset kind=single effect=flap-coupling ...] [--out benchmarks/results] [--no-peer]
     python benchmarks/diagnosis_power.py --summarise benchmarks/results/diagnosis_power_dev.jsonl
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import itertools
 import json
 import multiprocessing as mp
@@ -59,7 +64,13 @@ INPUTS = ("cycle", "3211", "211", "doublet", "pulse")
 HALVES = ("dev", "heldout")
 #: Forms in the held-out half only, whatever their index: members of a family that the
 #: development half never shows (the family, not a form, must generalise).
-HELDOUT_ONLY = {"actuator-dynamics": ("asymmetric", "lag-delay")}
+HELDOUT_ONLY = {"actuator-dynamics": ("asymmetric", "lag-delay", "saturation", "backlash"),
+                "nonlinear-aero": ("saturation", "one-sided"),
+                "unsteady-aero": ("wagner",),
+                "flap-coupling": ("harmonic",),
+                "lon-lat-coupling": ("gyroscopic",),
+                "time-offset": ("resync",),
+                "flap-frequency": ("saturating",)}
 
 
 def _rng(case_key: str, seed: int):
@@ -164,8 +175,24 @@ def case_flights(case: dict, rec: dict):
     return train, test
 
 
-def run_case(case: dict) -> dict:
-    """Simulate, diagnose and score one case (errors are recorded, not raised)."""
+def run_peer(train, test, axis: str) -> dict:
+    """The SINDy peer (`peers/sindy.py`) on the case's flights: its `verdict`, `kept` families
+    (best first), each family's test gain and kept terms, and `wall_s`; `error` instead when
+    it failed (fwid's record stands either way)."""
+    t0 = time.perf_counter()
+    try:
+        from peers.sindy import diagnose
+
+        got = diagnose(train, test, axis)
+    except Exception as exc:  # noqa: BLE001 - a benchmark records, it does not stop
+        return {"error": f"{type(exc).__name__}: {exc}", "wall_s": time.perf_counter() - t0}
+    return {"verdict": got["verdict"], "kept": got["kept"], "families": got["families"],
+            "wall_s": got["wall_s"]}
+
+
+def run_case(case: dict, peer: bool = True) -> dict:
+    """Simulate, diagnose and score one case (errors are recorded, not raised); with `peer`
+    the SINDy peer runs on the same flights after fwid (`rec["sindy"]`)."""
     import fwid
 
     rec = dict(case)
@@ -181,6 +208,8 @@ def run_case(case: dict) -> dict:
     except Exception as exc:  # noqa: BLE001 - a benchmark records, it does not stop
         rec["error"] = f"{type(exc).__name__}: {exc}"
         return rec
+    if peer:
+        rec["sindy"] = run_peer(train, test, case["axis"])
     rec["verdict"] = diag.verdict
     effects = getattr(diag, "effects", None)
     if effects is not None:
@@ -211,6 +240,8 @@ def main(argv=None):
     ap.add_argument("--subset", nargs="*", default=[], help="filters key=value[,value]")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     ap.add_argument("--list", action="store_true", help="print the cases and stop")
+    ap.add_argument("--no-peer", action="store_true",
+                    help="skip the SINDy peer (by default it runs on every case's flights)")
     ap.add_argument("--summarise", metavar="FILE.jsonl", help="only rewrite the summary")
     args = ap.parse_args(argv)
 
@@ -233,13 +264,17 @@ def main(argv=None):
     with open(stem.with_suffix(".jsonl"), "w") as fh, \
             mp.get_context("spawn").Pool(args.workers) as pool:
         fh.write(_provenance.jsonl_first_line())
-        for i, r in enumerate(pool.imap_unordered(run_case, todo), 1):
+        work = functools.partial(run_case, peer=not args.no_peer)
+        for i, r in enumerate(pool.imap_unordered(work, todo), 1):
             results.append(r)
             fh.write(json.dumps(r) + "\n")
             fh.flush()
+            p = r.get("sindy")
+            peer = (f"; sindy {p.get('verdict', p.get('error'))} ({p['wall_s']:.1f} s)"
+                    if p else "")
             print(f"[{i}/{len(todo)}] {r['kind']} {r['effect']}/{r['form']} s={r['strength']:g} "
                   f"{r['n']}+{r['n']} {r['axis']}: {r.get('verdict', r.get('error'))} "
-                  f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s)", flush=True)
+                  f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s){peer}", flush=True)
     cmd = "python benchmarks/diagnosis_power.py " + " ".join(sys.argv[1:] if argv is None else argv)
     summarise(results, stem, note=f"`{cmd}`, {args.workers} worker(s), "
               f"{time.perf_counter() - t0:.0f} s")

@@ -8,7 +8,13 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 import diagnosis_power as dp  # noqa: E402
-from _power_summary import catalogue_pairs, set_score, set_table, summarise  # noqa: E402
+from _power_summary import (  # noqa: E402
+    catalogue_pairs,
+    peer_table,
+    set_score,
+    set_table,
+    summarise,
+)
 
 
 def test_halves_share_no_form_and_no_seed():
@@ -20,6 +26,23 @@ def test_halves_share_no_form_and_no_seed():
     # more seeds add cases and keep the first ones as they were
     more = dp.cases("heldout", seeds=3)
     assert len(more) > len(held) and all(c in more for c in held)
+
+
+def test_held_out_only_forms_never_reach_the_development_half():
+    """Every catalogue family has a form the development half never shows, alone or in a
+    pair; the held-out half shows each of them."""
+    from fwid.synth import EFFECTS, FORMS
+
+    assert set(dp.HELDOUT_ONLY) == set(EFFECTS[1:])
+    only = {(e, f) for e, fs in dp.HELDOUT_ONLY.items() for f in fs}
+    assert all(f in FORMS[e] for e, f in only)
+
+    def shown(cs):
+        return {(e, f) for c in cs for e, f in zip(c["effect"].split("+"), c["form"].split("+"))}
+
+    assert not shown(dp.cases("dev")) & only
+    held = dp.cases("heldout")
+    assert only <= shown([c for c in held if c["kind"] == "single"])
 
 
 def test_slice_runs_blind_and_is_summarised(tmp_path):
@@ -46,6 +69,11 @@ def test_slice_runs_blind_and_is_summarised(tmp_path):
     assert "## The confidence set of explanations" in text
     back = [json.loads(json.dumps(r)) for r in recs]  # the records are what the .jsonl holds
     assert [r["verdict"] for r in back] == ["lon-lat-coupling", "none"]
+    # the SINDy peer ran on the same flights, its verdict recorded beside fwid's
+    for r in back:
+        assert set(r["sindy"]) >= {"verdict", "kept", "families", "wall_s"}, r["sindy"]
+    assert "| SINDy (pysindy) |" in text
+    assert "sindy" not in dp.run_case(dict(pick[1]), peer=False)
 
 
 def test_the_set_is_scored_for_coverage_decisiveness_alarms_and_pairs():
@@ -77,6 +105,42 @@ def test_the_set_is_scored_for_coverage_decisiveness_alarms_and_pairs():
     assert "a kept explanation holds both effects in 1/1" in text
     assert "a catalogue name in the set of 1/2 clean and out-of-catalogue cases" in text
     assert set_score({"kind": "single", "effect": "x", "verdict": "x"}) is None
+
+
+def test_the_summary_shows_the_peer_beside_fwid(tmp_path):
+    """Given records with the peer's verdict, the summary has a SINDy row beside fwid's for the
+    same targets: single effects at strength 1 (6+6 and 4+4), pairs, false alarms."""
+    def rec(kind, effect, verdict, peer, kept=None, n=6, strength=1.0, effects=None):
+        return {"kind": kind, "effect": effect, "form": "f", "strength": strength, "n": n,
+                "seed": 1, "rep": 0, "axis": "lon", "verdict": verdict, "wall_s": 2.0,
+                "effects": effects if effects is not None else
+                ([] if verdict == "none" else [verdict]),
+                "confidence_set": [{"explanation": effects or ([] if verdict == "none"
+                                                               else [verdict]), "p_value": 1.0}],
+                "sindy": {"verdict": peer, "kept": kept if kept is not None else
+                          ([] if peer == "none" else [peer]), "families": {}, "wall_s": 0.5}}
+
+    lines = [rec("single", "nonlinear-aero", "nonlinear-aero", "nonlinear-aero",
+                 kept=["nonlinear-aero", "unsteady-aero"]),
+             rec("single", "time-offset", "time-offset", "actuator-dynamics",
+                 kept=["actuator-dynamics", "time-offset"]),
+             rec("single", "flap-coupling", "flap-coupling", "none", n=4),
+             rec("pair", "flap-coupling+time-offset", "time-offset", "time-offset",
+                 kept=["time-offset", "flap-coupling"],
+                 effects=["time-offset", "flap-coupling"]),
+             rec("clean", "none", "none", "unsteady-aero"),
+             rec("out", "cg-offset", "unexplained", "none")]
+    path = tmp_path / "fake.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in lines))
+    back = [json.loads(x) for x in path.read_text().splitlines()]
+    text = "\n".join(peer_table(back))
+    assert "| fwid | 2/2 | 2/2 | 2/2 | 1/1 | 1/1 | 0/2 | 2.0, 2.0 |" in text
+    assert "| SINDy (pysindy) | 1/2 | 2/2 | 0/2 | 0/1 | 1/1 | 1/2 | 0.5, 0.5 |" in text
+    assert "6 cases with both verdicts" in text
+    md = summarise(back, tmp_path / "fake")
+    assert "## A peer beside fwid (the same flights)" in md and "| SINDy (pysindy) |" in md
+    old = [{k: v for k, v in r.items() if k != "sindy"} for r in back]  # --no-peer
+    assert peer_table(old) == ["(no peer ran: `--no-peer`)"]
 
 
 def test_pairs_are_also_scored_against_issue_12s_catalogue():
@@ -111,7 +175,7 @@ def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named(monkeypatch):
                 and c["strength"] == 2.0 and c["n"] == 6 and c["seed"] == 2)
     seen, real = [], fwid.diagnose
     monkeypatch.setattr(fwid, "diagnose", lambda *a, **kw: seen.append(real(*a, **kw)) or seen[-1])
-    rec = dp.run_case(dict(case))
+    rec = dp.run_case(dict(case), peer=False)
     text = diagnosis_summary(seen[0])
     assert "may only stand in, through the states' rates, for a disturbance or for what " \
         "flap-frequency explains directly" in text and "tracked the disturbance" not in text

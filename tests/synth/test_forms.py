@@ -119,14 +119,60 @@ def test_actuator_forms_lag_the_command_and_keep_the_measured_column():
         m = fl["meta"]
         k0 = m["first_input"]
         ue, uc = m["u_eff"][:, 0], m["u_cmd"][:, 0]
+        c = Effect("actuator-dynamics", form=form).coefficients()
+        # where it settles: a travel limit saturates the step, play leaves it short by the band
+        settled = (c["limit_de"] * np.tanh(uc / c["limit_de"]) if form == "saturation"
+                   else uc - c["play_de"] if form == "backlash" else uc)
         assert np.all(ue[:k0] == 0.0)
         assert ue[k0 + 1] < uc[k0 + 1] - 1e-3, form  # lags right after the step
-        assert abs(ue[k0 + 150] - uc[k0 + 150]) < 2e-3, form  # and settles
+        assert abs(ue[k0 + 150] - settled[k0 + 150]) < 2e-3, form  # and settles
         np.testing.assert_allclose(fl["de"] - m["trim"]["de0"], uc, atol=1e-15)
     d = simulate_flight(effect="actuator-dynamics", form="delay", **kw)["meta"]
     T = Effect("actuator-dynamics", form="delay").coefficients()["delay"]
     n = round(T * 200)
     np.testing.assert_allclose(d["u_eff"][n:, 0], d["u_cmd"][:-n, 0], atol=1e-12)
+
+
+def test_backlash_holds_on_a_reversal_and_saturation_levels_off():
+    """`backlash`: the deflection does not move while the command is within the play of it
+    (hysteresis: after a reversal it settles short by the play, from the other side);
+    `saturation`: a larger command gains less deflection."""
+    from fwid.synth._effects._actuator import Backlash
+
+    kw = {"axis": "lon", "noise": 0.0, "input": "doublet", "unit": 1.0, "ripple": False}
+    fl = simulate_flight(effect="actuator-dynamics", form="backlash", amplitude=0.1, **kw)
+    m = fl["meta"]
+    ue, uc = m["u_eff"][:, 0], m["u_cmd"][:, 0]
+    bl = Backlash(1.0, DELFLY)
+    b = bl.c["play_de"]
+    u = np.array([0.05, 0.0])
+    assert np.all(bl.aux_rhs(None, u + [0.9 * b, 0.0], u, u) == 0.0)  # within the play
+    assert bl.aux_rhs(None, u + [2 * b, 0.0], u, u)[0] == pytest.approx(b / bl.c["tau"])
+    turn = m["first_input"] + 200  # the doublet reverses after its 1 s unit
+    assert abs(ue[turn - 1] - (uc[turn - 1] - b)) < 2e-3  # short by the play from below
+    assert abs(ue[turn + 150] - (uc[turn + 150] + b)) < 2e-3  # then from above
+    small, large = (simulate_flight(effect="actuator-dynamics", form="saturation",
+                                    amplitude=a, **kw)["meta"]["u_eff"][:, 0] for a in (0.02, 0.2))
+    k = m["first_input"] + 150
+    assert 0.95 < small[k] / 0.02 <= 1.0 and large[k] / 0.2 < 0.5
+
+
+def test_new_forms_stay_bounded_at_strength_two():
+    """8 s flights of the forms added last do not run away at strength 2: the attitude stays
+    well below pi, within 0.8 rad or 1.5 times its swing without the effect (a lateral doublet
+    without any effect rolls by ~1.3 rad in 8 s)."""
+    def swing(fl):
+        c = fl["meta"]["clean"]
+        return max(np.max(np.abs(c[k] - c[k][0])) for k in ("theta", "phi"))
+
+    kw = {"seed": 1, "duration": 8.0, "input": "doublet", "vehicle": random_vehicle(1)}
+    without = {ax: swing(simulate_flight(axis=ax, **kw)) for ax in ("lon", "lat")}
+    for e, f in ALL_FORMS:
+        if e not in EFFECTS or FORMS[e].index(f) < (6 if e == "actuator-dynamics" else 4):
+            continue
+        for ax in form_axes(e, f):
+            got = swing(simulate_flight(axis=ax, effect=e, form=f, strength=2.0, **kw))
+            assert np.isfinite(got) and got < max(1.5 * without[ax], 0.8), (e, f, ax, got)
 
 
 def test_sensor_offset_shifts_the_measured_control_the_other_way():
@@ -170,6 +216,54 @@ def test_clock_drift_offset_grows_over_the_flight():
     np.testing.assert_allclose(fl["de"], np.interp(t - k * t, t, base["de"]), atol=1e-12)
 
 
+def test_resync_offset_is_a_sawtooth():
+    """`resync`: the offset grows at `k` and snaps back to zero every 1.5 s."""
+    kw = {"axis": "lon", "noise": 0.0, "ripple": False}
+    base = simulate_flight(**kw)
+    fl = simulate_flight(effect="time-offset", form="resync", **kw)
+    k = Effect("time-offset", form="resync").coefficients()["drift"]
+    t = base["t"]
+    T = k * np.mod(t + 1.0, 1.5)
+    assert T.max() == pytest.approx(1.5 * k, rel=0.01) and np.sum(np.diff(T) < 0) == 3
+    np.testing.assert_allclose(fl["de"], np.interp(t - T, t, base["de"]), atol=1e-12)
+
+
+def test_saturating_thrust_levels_off_and_harmonic_moves_the_second_harmonic_only():
+    kw = {"axis": "lon", "noise": 0.0, "seed": 3}
+    fl = simulate_flight(effect="flap-frequency", form="saturating", **kw)
+    c = Effect("flap-frequency", form="saturating").coefficients()
+    df = fl["meta"]["clean"]["f"] - DELFLY.f0
+    np.testing.assert_allclose(fl["meta"]["loads_effect"]["X"], c["cx"] * 0.05 * np.tanh(df / 0.05),
+                               atol=1e-12)
+    from fwid.synth._effects._flapping import Harmonic
+
+    xc = np.zeros(9)
+    xc[2] = 0.1
+    F, H, Q = np.ones(6), np.arange(18.0).reshape(3, 6), np.zeros((3, 6))
+    out = Harmonic(1.0, DELFLY).flapping(xc, np.zeros(2), F, H, Q)
+    np.testing.assert_allclose(out - F, 0.1 * Harmonic.COEFFICIENTS["hw"] * H[1])
+
+
+def test_wagner_lag_is_two_poles():
+    """`wagner`: after a step of the incidence the lagged load deficit decays with a fast and a
+    slow time constant (Jones' two-pole indicial response), starting from the whole lagging
+    fraction."""
+    from fwid.synth._effects._aero import Wagner
+
+    w = Wagner(1.0, DELFLY)
+    c = w.c
+    x = np.zeros(9)
+    x[2] = 1.0
+    aux = np.zeros(18)  # the lagged states still at rest
+    d0 = w.extra_loads(x, np.zeros(2), aux)
+    aux_late = np.concatenate([x * (1 - np.exp(-0.1 / c["tau1"])),
+                               x * (1 - np.exp(-0.1 / c["tau2"]))])
+    d1 = w.extra_loads(x, np.zeros(2), aux_late)
+    expect = c["a1"] * np.exp(-0.1 / c["tau1"]) + (1 - c["a1"]) * np.exp(-0.1 / c["tau2"])
+    np.testing.assert_allclose(d1, expect * d0, rtol=1e-12)
+    assert d0[2] != 0 and np.all(w.aux_rhs(x, None, None, aux)[:9] == x / c["tau1"])
+
+
 def test_two_effects_compose():
     a = simulate_flight(seed=2, noise=0.0, effect="flap-coupling", form="control", **SHORT)
     b = simulate_flight(seed=2, noise=0.0, effect="actuator-dynamics", form="delay", **SHORT)
@@ -197,7 +291,8 @@ def test_two_effects_compose():
 def test_effect_noise_ratio_sizes_strength_one():
     """Strength 1 is about as strong as the noise on its loads (banded yardstick)."""
     for e, f in (("flap-coupling", "phase"), ("nonlinear-aero", "cubic"),
-                 ("lon-lat-coupling", "lon-to-lat")):
+                 ("lon-lat-coupling", "lon-to-lat"), ("nonlinear-aero", "one-sided"),
+                 ("lon-lat-coupling", "gyroscopic")):
         r = effect_noise_ratio(e, f)  # the default manoeuvre: 3211, 4.5 s, 200 Hz
         assert 0.7 < r["max"] < 2.0, (e, f, r["max"])
     none = effect_noise_ratio("nonlinear-aero", strength=0.0, axes=("lon",), duration=3.0)

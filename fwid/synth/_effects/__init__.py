@@ -15,17 +15,18 @@ to the RMS that sensor noise puts on the reconstructed load, on the load it hits
 it for every form. Loads and modulations scale linearly with the strength, time scales of
 actuators and sensors in proportion to it.
 
-Forms (equations in each module's docstring; index 0 is the default):
+Forms (equations in each module's docstring; index 0 is the default; forms are only ever
+appended, so a form's index, which splits the diagnosis benchmark's halves, never changes):
 
 | effect | forms | module |
 |---|---|---|
-| `flap-coupling` | `amplitude`, `control`, `phase`, `shape` | `_flapping.py` |
-| `nonlinear-aero` | `quadratic`, `cubic`, `rate-damping`, `cross` | `_aero.py` |
-| `lon-lat-coupling` | `control`, `lat-to-lon`, `lon-to-lat`, `rates` | `_coupling.py` |
-| `actuator-dynamics` | `lag`, `delay`, `servo`, `rate-limit` | `_actuator.py` |
-| `unsteady-aero` | `state-lag`, `incidence-lag`, `second-order`, `lift-lag` | `_aero.py` |
-| `time-offset` | `trailing`, `clock-drift`, `sample-hold`, `wandering` (the control columns are late) | `_actuator.py` |
-| `flap-frequency` | `thrust`, `quadratic`, `lateral`, `lagged` | `_frequency.py` |
+| `flap-coupling` | `amplitude`, `control`, `phase`, `shape`, `harmonic` | `_flapping.py` |
+| `nonlinear-aero` | `quadratic`, `cubic`, `rate-damping`, `cross`, `saturation`, `one-sided` | `_aero.py` |
+| `lon-lat-coupling` | `control`, `lat-to-lon`, `lon-to-lat`, `rates`, `gyroscopic` | `_coupling.py` |
+| `actuator-dynamics` | `lag`, `delay`, `servo`, `rate-limit`, `asymmetric`, `lag-delay`, `saturation`, `backlash` | `_actuator.py` |
+| `unsteady-aero` | `state-lag`, `incidence-lag`, `second-order`, `lift-lag`, `wagner` | `_aero.py` |
+| `time-offset` | `trailing`, `clock-drift`, `sample-hold`, `wandering`, `resync` (the control columns are late) | `_actuator.py` |
+| `flap-frequency` | `thrust`, `quadratic`, `lateral`, `lagged`, `saturating` | `_frequency.py` |
 | `turbulence` (out) | `gusts` | `_gusts.py` |
 | `cg-offset` (out) | `attitude` | `_outside.py` |
 | `battery-sag` (out) | `linear` | `_outside.py` |

@@ -16,6 +16,14 @@ dynamics, is exactly the flight without the effect):
   (a servo that is slower against the airload): `tau_up` while `u_cmd > u_eff`, `tau_down`
   otherwise, both `s` times their value at strength 1.
 - `lag-delay` (5): a transport delay `T = s T1` followed by a first-order lag `tau = s tau1`.
+- `saturation` (6), Hammerstein: the commanded deflection through a soft travel limit, then
+  a first-order lag: `u_sat = m tanh(u_cmd / m)`, `u_eff' = (u_sat - u_eff) / tau`,
+  `m = m1 / s` per surface (`limit_de`, `limit_dr` [rad], a fraction of the default
+  manoeuvre's amplitude at strength 1), `tau = s tau1`.
+- `backlash` (7): play in the linkage, then a lag: the deflection moves only while the
+  command pulls it beyond a dead band of half-width `b`, `u_eff' = dz(u_cmd - u_eff) / tau`,
+  `dz(e) = sign(e) max(|e| - b, 0)` (it holds on a reversal until the command has crossed the
+  band: hysteresis), `b = s b1` per surface (`play_de`, `play_dr` [rad]), `tau = s tau1`.
 
 `time-offset` (in the catalogue since issue 16; `sensor-offset` is an alias): the true
 deflection acts at once, but the logged control columns `de`, `dr` (the whole measured
@@ -32,6 +40,10 @@ named `actuator-dynamics`). Before the offset the column holds its first value.
   (floor(t / Th - 1/2) + 1/2))`): late by `Th / 2` on average, in steps.
 - `wandering` (3): a clock synchronisation that hunts: the offset wanders slowly about
   `T = s T1`, `col(t - T (1 + 0.5 sin(2 pi 0.3 t)))`.
+- `resync` (4): the clocks drift apart and are resynchronised every `P` = 1.5 s: the offset
+  grows at `k = s k1` [s per s] from zero and snaps back to zero at each resynchronisation, a
+  sawtooth between 0 and `k P` (at the start two thirds of the way up: the first
+  resynchronisation is `P / 3` into the flight).
 """
 
 from __future__ import annotations
@@ -119,7 +131,34 @@ class LagDelay(Lag):
         return _delayed(tq, t, u_cmd, self.c["delay"])
 
 
-ACTUATOR = (Lag, Delay, Servo, RateLimit, Asymmetric, LagDelay)
+class Saturation(Lag):
+    effect, name = "actuator-dynamics", "saturation"
+    COEFFICIENTS = {"tau": 0.03, "limit_de": 0.08, "limit_dr": 0.17}
+
+    @classmethod
+    def coefficients(cls, strength):
+        c = cls.COEFFICIENTS
+        inf = float("inf")
+        return {"tau": c["tau"] * strength,
+                "limit_de": c["limit_de"] / strength if strength else inf,
+                "limit_dr": c["limit_dr"] / strength if strength else inf}
+
+    def aux_rhs(self, xc, u_cmd, u, aux):
+        m = np.array([self.c["limit_de"], self.c["limit_dr"]])
+        return (m * np.tanh(u_cmd / m) - u) / self.c["tau"]
+
+
+class Backlash(Lag):
+    effect, name = "actuator-dynamics", "backlash"
+    COEFFICIENTS = {"tau": 0.03, "play_de": 0.01, "play_dr": 0.02}
+
+    def aux_rhs(self, xc, u_cmd, u, aux):
+        b = np.array([self.c["play_de"], self.c["play_dr"]])
+        e = u_cmd - u
+        return np.sign(e) * np.maximum(np.abs(e) - b, 0.0) / self.c["tau"]
+
+
+ACTUATOR = (Lag, Delay, Servo, RateLimit, Asymmetric, LagDelay, Saturation, Backlash)
 
 
 class Trailing(Form):
@@ -160,4 +199,15 @@ class Wandering(Form):
         return _delayed(t, t, column, T)
 
 
-SENSOR = (Trailing, ClockDrift, SampleHold, Wandering)
+class Resync(Form):
+    effect, name = "time-offset", "resync"
+    COEFFICIENTS = {"drift": 0.035}
+    PERIOD = 1.5
+
+    def measured(self, t, column):
+        t = np.asarray(t, dtype=float)
+        since = np.mod(t - t[0] + 2.0 * self.PERIOD / 3.0, self.PERIOD)
+        return _delayed(t, t, column, self.c["drift"] * since)
+
+
+SENSOR = (Trailing, ClockDrift, SampleHold, Wandering, Resync)

@@ -14,6 +14,15 @@ on Y L N), so a flight of either axis shows it. `s` is the strength.
   no term changes its own load's damping or stiffness, which keeps the vehicle stable):
   `dX = s cx dw dq`, `dZ = s cz du dq`, `dM = s cm du dw`, `dY = s cy dp dr`,
   `dL = s cl dv dr`, `dN = s cn dv dp`.
+- `saturation` (4), loads that level off (the attached-flow load stops growing with the
+  speed and incidence): a fraction `W` (`s lon` for u, w; `s lat` for v) of the loads the
+  linear model gives those states (their columns of `Fx`) saturates, odd and linear at small
+  perturbations: the extra load `Fx W (S tanh(x / S) - x)` for x = du, dw, dv with fixed
+  scales `S` (`su`, `sw`, `sv` [m/s]). At large perturbations the derivatives keep
+  `1 - W` of their value.
+- `one-sided` (5), a stall-like kink: beyond a fixed threshold of one sign of the incidence
+  (`w0`, `v0` [m/s]) a fraction `W` of the incidence's load goes missing: the extra load
+  `-Fx W max(x - x0, 0)` for x = dw, dv (`s lon`, `s lat`).
 
 `unsteady-aero` (in the catalogue since issue 16): part of the state-dependent
 cycle-averaged aerodynamic loads (Eqs. 1-6) follows the states late (a lagging wake). `W`
@@ -29,6 +38,12 @@ states (auxiliary states started at the initial state), the extra load `Fx W (xl
   (a Kuessner-like response that starts flat).
 - `lift-lag` (3): every state, first order, `tau` = 0.075 s (a larger lateral fraction), but only the loads Z, M (lon)
   and Y, N (lat) lag: X and L follow the states at once.
+- `wagner` (4): the circulatory load (from the incidence w, v and the rates q, p, r) through a
+  two-pole indicial response (Jones' approximation of Wagner's function,
+  `1 - A1 exp(-t / tau1) - A2 exp(-t / tau2)`): two parallel first-order lags,
+  `x1' = (xc - x1) / tau1`, `x2' = (xc - x2) / tau2`, the extra load
+  `Fx W (a1 (x1 - xc) + a2 (x2 - xc))` with `a1 + a2 = 1` (Jones' 0.165 : 0.335) and
+  `tau1` = 0.25 s, `tau2` = 0.04 s: a fast lag of most of the deficit and a slow tail.
 """
 
 from __future__ import annotations
@@ -90,7 +105,47 @@ class Cross(Form):
                      N=c["cn"] * dv * dp)
 
 
-NONLINEAR = (Quadratic, Cubic, RateDamping, Cross)
+class Saturation(Form):
+    effect, name = "nonlinear-aero", "saturation"
+    COEFFICIENTS = {"lon": 0.4, "lat": 0.15, "su": 0.05, "sw": 0.05, "sv": 0.1}
+    #: Coefficients that are scales of the states (not scaled by the strength).
+    SCALES = ("su", "sw", "sv")
+    #: The states whose loads bend (indices into `STATES`) and their scales.
+    BENT = ((1, "su"), (2, "sw"), (6, "sv"))
+
+    @classmethod
+    def coefficients(cls, strength):
+        return {k: float(v if k in cls.SCALES else v * strength)
+                for k, v in cls.COEFFICIENTS.items()}
+
+    def __init__(self, strength, vehicle):
+        super().__init__(strength, vehicle)
+        Fx = aero_matrices(vehicle)[0]
+        self._cols = [i for i, _ in self.BENT]
+        self._scales = np.array([self.c[k] for _, k in self.BENT])
+        w = np.array([self.c["lon" if i < 3 else "lat"] for i in self._cols])
+        self._wFx = Fx[:, self._cols] * w  # the bent states' columns of Fx, weighted
+
+    def bend(self, x):
+        """The part of the states' load that goes missing, per bent state."""
+        s = self._scales
+        return s * np.tanh(x / s) - x
+
+    def extra_loads(self, xc, u, aux):
+        return self.bend(xc[..., self._cols]) @ self._wFx.T
+
+
+class OneSided(Saturation):
+    effect, name = "nonlinear-aero", "one-sided"
+    COEFFICIENTS = {"lon": 0.5, "lat": 0.12, "w0": 0.01, "v0": 0.02}
+    SCALES = ("w0", "v0")
+    BENT = ((2, "w0"), (6, "v0"))
+
+    def bend(self, x):
+        return -np.maximum(x - self._scales, 0.0)
+
+
+NONLINEAR = (Quadratic, Cubic, RateDamping, Cross, Saturation, OneSided)
 
 
 class StateLag(Form):
@@ -150,4 +205,32 @@ class LiftLag(StateLag):
     LOADS = "YZMN"
 
 
-UNSTEADY = (StateLag, IncidenceLag, SecondOrder, LiftLag)
+class Wagner(StateLag):
+    name = "wagner"
+    COEFFICIENTS = {"tau1": 0.25, "tau2": 0.04, "a1": 0.33, "lon": 0.5, "lat": 0.1}
+    LAGGING = (0, 2, 4, 5, 6)
+
+    @classmethod
+    def coefficients(cls, strength):
+        c = cls.COEFFICIENTS
+        return {"tau1": c["tau1"], "tau2": c["tau2"], "a1": c["a1"], "lon": c["lon"] * strength,
+                "lat": c["lat"] * strength}
+
+    def __init__(self, strength, vehicle):
+        super().__init__(strength, vehicle)
+        self.n_aux = 18
+
+    def aux0(self, xc0):
+        return np.tile(np.array(xc0, dtype=float), 2)
+
+    def aux_rhs(self, xc, u_cmd, u, aux):
+        return np.concatenate([(xc - aux[..., :9]) / self.c["tau1"],
+                               (xc - aux[..., 9:]) / self.c["tau2"]], axis=-1)
+
+    def extra_loads(self, xc, u, aux):
+        a1 = self.c["a1"]
+        lagged = a1 * aux[..., :9] + (1.0 - a1) * aux[..., 9:]
+        return (lagged - xc) @ self._wFx.T
+
+
+UNSTEADY = (StateLag, IncidenceLag, SecondOrder, LiftLag, Wagner)

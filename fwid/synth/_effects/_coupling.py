@@ -14,6 +14,11 @@
   flapping wings), `dY = s yq dq`, `dL = s lq dq`, `dN = s nq dq`. Only a longitudinal
   manoeuvre shows it. (Rates coupling both ways closes a loop through the fast roll mode
   that diverges at strength 2, so it is one-way.)
+- `gyroscopic` (4): a spinning rotor (the motor and gearbox) with its angular momentum along
+  the body x axis (its sign the rotor's direction): the body rates turn it, and its reaction
+  is a moment across them, `dM = s hm dr`, `dN = -s hn dq` (an ideal rotor has `hm = hn`,
+  which does no work; each is sized here to the noise on its own load, like every form).
+  Both manoeuvres show it (a pitching manoeuvre on N, a lateral one on M).
 """
 
 from __future__ import annotations
@@ -71,4 +76,13 @@ class Rates(Form):
         return loads(np.shape(xc)[:-1], Y=c["yq"] * dq, L=c["lq"] * dq, N=c["nq"] * dq)
 
 
-FORMS = (Control, LatToLon, LonToLat, Rates)
+class Gyroscopic(Form):
+    effect, name = "lon-lat-coupling", "gyroscopic"
+    COEFFICIENTS = {"hm": 6.0e-4, "hn": 1.5e-4}
+
+    def extra_loads(self, xc, u, aux):
+        c = self.c
+        return loads(np.shape(xc)[:-1], M=c["hm"] * xc[..., 5], N=-c["hn"] * xc[..., 0])
+
+
+FORMS = (Control, LatToLon, LonToLat, Rates, Gyroscopic)

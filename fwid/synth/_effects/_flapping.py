@@ -10,6 +10,9 @@ b_n cos(n phi)`, `Q_n = a_n cos(n phi) - b_n sin(n phi)` (n = 1..3).
   sin(n d)` = Eq. 12 at `phi + d`, `d = s (cw dw + cq dq + cv dv + cp dp)` [rad].
 - `shape` (3): only the 2nd and 3rd harmonics scaled (the wave shape changes, the
   fundamental does not), `F' = F + s (k2u du + k2v dv) H_2 + s (k3w dw + k3r dr) H_3`.
+- `harmonic` (4): one harmonic alone, the 2nd, modulated in amplitude by the incidence and
+  the rates (the stroke's up/down asymmetry changes with them; the fundamental and the 3rd
+  do not), `F' = F + s (hw dw + hq dq + hv dv + hp dp) H_2`.
 """
 
 from __future__ import annotations
@@ -81,4 +84,14 @@ class Shape(Form):
         return F + g2[..., None] * H[..., 1, :] + g3[..., None] * H[..., 2, :]
 
 
-FORMS = (Amplitude, Control, Phase, Shape)
+class Harmonic(Form):
+    effect, name = "flap-coupling", "harmonic"
+    COEFFICIENTS = {"hw": 2.4, "hq": 0.16, "hv": 1.6, "hp": 0.032}
+    harmonics = True
+
+    def flapping(self, xc, u, F, H, Q):
+        g = _sum(self.c, xc, ("hw", "hq", "hv", "hp"))
+        return F + g[..., None] * H[..., 1, :]
+
+
+FORMS = (Amplitude, Control, Phase, Shape, Harmonic)

@@ -10,6 +10,8 @@ nominal `f0` (`_simulate.FlapFrequency`); `df = f - f0`, `s` is the strength:
   respond unequally to the frequency).
 - `lagged` (3): the `thrust` loads follow `df` through a first-order lag of `tau` = 0.15 s
   (the wake and the wing's flexibility take time to build up).
+- `saturating` (4): the `thrust` loads level off with the frequency (the wings' flexibility
+  caps the stroke's gain): `df` replaced by `fs tanh(df / fs)`, `fs` = 0.05 Hz fixed.
 """
 
 from __future__ import annotations
@@ -66,4 +68,14 @@ class Lagged(Thrust):
         return y
 
 
-FORMS = (Thrust, Quadratic, Lateral, Lagged)
+class Saturating(Thrust):
+    name = "saturating"
+    COEFFICIENTS = {"cx": 0.0255, "cz": -0.041, "cm": 7.7e-4}
+    SCALE = 0.05
+
+    def _df(self, t, f):
+        df = np.asarray(f, dtype=float) - self.vehicle.f0
+        return self.SCALE * np.tanh(df / self.SCALE)
+
+
+FORMS = (Thrust, Quadratic, Lateral, Lagged, Saturating)
