@@ -31,7 +31,7 @@ and wall time under `sindy`); then the summary `diagnosis_power_{half}.md` (with
 row beside fwid's) and the power curves `diagnosis_power_{half}.png` (`_power_summary.py`).
 
     python benchmarks/diagnosis_power.py --half dev [--seeds 2] [--workers 1] [--limit N]
-        [--subset kind=single effect=flap-coupling ...] [--out benchmarks/results] [--no-peer]
+        [--subset kind=single effect=flap-coupling ... [\| kind=pair ...]] [--out ...] [--no-peer]
     python benchmarks/diagnosis_power.py --summarise benchmarks/results/diagnosis_power_dev.jsonl
 """
 
@@ -127,14 +127,25 @@ def cases(half: str = "dev", seeds: int = 2) -> list[dict]:
 
 
 def select(all_cases: list[dict], subset: list[str], limit: int | None) -> list[dict]:
-    """`subset`: `key=value[,value]` filters on case fields (all must hold); then the first
+    """`subset`: `key=value[,value]` filters on case fields (all must hold), in groups
+    separated by `|` (a case in any group is taken, in the cases' order); then the first
     `limit` cases."""
+    groups, group = [], []
     for cond in subset:
+        if cond == "|":
+            groups.append(group)
+            group = []
+        else:
+            group.append(cond)
+    groups.append(group)
+
+    def holds(c, cond):
         key, _, vals = cond.partition("=")
         allowed = set(vals.split(","))
-        all_cases = [c for c in all_cases if str(c.get(key)) in allowed
-                     or (key == "effect" and allowed & set(c["effect"].split("+")))]
-    return all_cases[:limit] if limit else all_cases
+        return str(c.get(key)) in allowed or (key == "effect"
+                                              and bool(allowed & set(c["effect"].split("+"))))
+    out = [c for c in all_cases if any(all(holds(c, x) for x in g) for g in groups)]
+    return out[:limit] if limit else out
 
 
 def _record_candidates(diag) -> list[dict]:

@@ -27,19 +27,13 @@ from .._errors import InputError
 
 
 def _variant(text, axis: str = "lon"):
-    """The variant back from `diagnosis.json`'s text (`_diagnose._variant_text`)."""
+    """The variant back from `diagnosis.json`'s text (`_scores.variant_text`)."""
     if text is None:
         return None
     if text == "at once":
         return 0.0
-    if text.startswith("terms "):  # a subset of nonlinear-aero's terms
-        from ..diagnosis._catalogue import quadratic_names
-
-        names = quadratic_names(axis)
-        try:
-            return tuple(names.index(n) for n in text[len("terms "):].split(", "))
-        except ValueError:
-            raise InputError(f"diagnosis.json: cannot read the variant {text!r}") from None
+    if text.startswith(("terms ", "smooth ", "products ")):
+        return None  # a smooth member needs its numbers (`member`): the baseline stands for it
     from ..diagnosis._catalogue import ACTUATOR_FILTERS, filter_text
 
     for v in ACTUATOR_FILTERS:  # the members of actuator-dynamics' family in words
@@ -65,11 +59,23 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
     candidates."""
     from ..diagnosis._confidence import rivals
 
+    from ..diagnosis._catalogue import member_from_json
+
     variants = {c["effect"]: c.get("variant") for c in diag.get("candidates", [])}
+    members = {c["effect"]: c["member"] for c in diag.get("candidates", []) if "member" in c}
     axis = diag.get("axis", "lon")
+
+    def member(n):  # every number of the member when the report has them, else its words
+        if n in members:
+            try:
+                return member_from_json(n, members[n])
+            except (ValueError, KeyError, TypeError) as exc:
+                raise InputError(f"diagnosis.json: cannot read {n}'s member ({exc})") from None
+        return _variant(variants.get(n), axis)
+
     firsts = rivals(diag.get("confidence_set") or [], list(variants))
     if len(firsts) >= 2:
-        return [(n, _variant(variants.get(n), axis)) for n in firsts[:2]]
+        return [(n, member(n)) for n in firsts[:2]]
     rows = diag.get("effects") or []
     pick = next((r for r in rows if r.get("near_tie")), rows[0] if rows else None)
     if pick is not None and pick.get("runner_up"):
@@ -78,7 +84,7 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
         names = [c["effect"] for c in diag.get("candidates", [])][:2]
     if len(names) < 2:
         raise InputError("diagnosis.json: no two candidate effects to tell apart")
-    return [(n, _variant(variants.get(n), axis)) for n in names]
+    return [(n, member(n)) for n in names]
 
 
 def control_map(model, axis: str, variant_of_control):
@@ -133,6 +139,20 @@ def control_map(model, axis: str, variant_of_control):
         _, ys = jax.lax.scan(step, jnp.asarray(zi) * u[0], u)
         return ys
 
+    def static(u, kind, size):
+        """The servo's static nonlinearity (`actuator_dynamics.static`)."""
+        if kind == "saturation":
+            return jnp.clip(u, -size, size)
+        if kind == "dead-band":
+            return jnp.sign(u) * jnp.maximum(jnp.abs(u) - size, 0.0)
+
+        def step(y, x):
+            y = jnp.where(x > y + size / 2, x - size / 2, jnp.where(x < y - size / 2,
+                                                                   x + size / 2, y))
+            return y, y
+        _, ys = jax.lax.scan(step, u[0], u)
+        return ys
+
     def inputs(t, u):
         x = u
         if shift is not None:
@@ -147,6 +167,10 @@ def control_map(model, axis: str, variant_of_control):
                 x = lag(jnp.interp(tt - p[1], tt, u), dt, p[0])
             elif kind == "second-order":
                 x = second_order(u, dt, *p)
+            elif kind in ("saturation", "dead-band", "backlash"):
+                tau, size, order = p
+                x = lag(static(u, kind, size), dt, tau) if order == "before" else static(
+                    lag(u, dt, tau), kind, size)
             else:
                 x = stepped(u, dt, p, kind)
         return jnp.zeros((u.shape[0], nu)).at[:, 0].set(x)
@@ -186,7 +210,10 @@ def discriminating_models(axis: str, pair, flights, say=None):
                              joint=True, start="model")
             m = ident.model.with_params({k: 0.0 for k in ident.model.local})
             if name == "unsteady-aero":  # the lagging part from the simulated states
-                m = lag_states(m, axis, float(variant))
+                try:
+                    m = lag_states(m, axis, variant)
+                except (ValueError, AttributeError) as exc:
+                    raise InputError(f"unsteady-aero: {exc}") from None
             models.append(m)
             shift = variant if name == "actuator-dynamics" else (
                 ("delay", -float(variant)) if name == "time-offset" else None)

@@ -103,12 +103,14 @@ class Engine:
     and the folds of the cross-fit reuse each other's work."""
 
     def __init__(self, all_units: Sequence[Unit], loads: Sequence[str], catalogue=CATALOGUE,
-                 own: Sequence[str] | None = None):
+                 own: Sequence[str] | None = None, cutoff: float = 5.0):
         self.units = list(all_units)
         self.loads = tuple(loads)
         #: The loads of the manoeuvred axis (default: all).
         self.own = self.loads if own is None else tuple(ld for ld in self.loads if ld in own)
         self.catalogue = tuple(catalogue)
+        #: The split [Hz] of the units' signals (Section III.B).
+        self.cutoff = cutoff
         self._design: dict = {}
         self._series: dict = {}
         self._fits: dict = {}

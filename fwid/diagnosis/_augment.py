@@ -8,16 +8,19 @@ Each effect of the verdict becomes terms of the cycle-averaged model:
   one through the diagnosed filter (a lead for `time-offset`), replaces it as the model's
   input (`d_eff`, a prepared column; the filter is the diagnosis's, the control derivative
   is re-estimated);
-- `unsteady-aero`: the lagging part `lag(x) - x` of the axis's measured states (the
-  diagnosed time constant; prepared columns `u_lag`, ...) as extra inputs, with a derivative
-  per own load (`Mw_lag`, ...: Eqs. 1-6 with a lagging share);
+- `unsteady-aero`: per own load, the lagging part of its quasi-steady load (the diagnosed
+  filter on the baseline's state load in the measured cycle-averaged states; prepared
+  columns `X_lag`, ...) as an extra input of that load alone, with its coefficient
+  (`X_lag`, ...);
 - `flap-frequency`: the measured flapping frequency's deviation from its median, and its
   square, as extra inputs with a derivative per own load (`Xf`, `Xff`, ...); the frequency
   lag, when one was diagnosed, is applied to the prepared column;
 - `lon-lat-coupling`: the other axis's measured states and control as extra inputs, with a
   derivative per own load (`Xv`, `Mdr`, `Lq`, ...: Eqs. 1-6 with the cross terms);
-- `nonlinear-aero`: the quadratic terms of `_catalogue.py` in the *simulated* states, with a
-  coefficient per own load (`M_qq`, `Z_w|w|`, `X_uw`, ...);
+- `nonlinear-aero`: the diagnosed member's smooth functions (the diagnosis's own spline
+  components, `_smooth.py`) of the *simulated* states and of the measured cycle-averaged
+  control, and their products, with a coefficient per own load (`M_w1`, `Z_de2`, `X_uw`,
+  ...);
 - the probe `attitude`: a derivative of each own load on the attitude state (`Mtheta`);
 - the probe `drift`: the time since the flight's start (per 10 s) and its square as extra
   inputs, with a coefficient per own load (`Xtime`, `Xtime2`, ...), as the probe fits them.
@@ -30,6 +33,7 @@ does not contain: it is left out (the result says so).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Sequence
 
 import equinox as eqx
@@ -37,52 +41,41 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data import Flight
-from ..decomposition import decompose
 from ..identification import get_model
 from ..models import GreyBoxModel
-from ._catalogue import actuator_filter, filter_text, frequency_deviation, lagging_part
+from ._catalogue import actuator_filter, filter_text, frequency_deviation
+from ._catalogue.nonlinear_aero import Terms
+from ._catalogue.unsteady_aero import Lagging, lagging, quasi_steady, unsteady_states
 from ._probes import ATTITUDE, elapsed
-from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, other
+from ._catalogue._effect import variables
+from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, cycle_averaged, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
 IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
           "lon-lat-coupling", "nonlinear-aero", "attitude", "drift")
 
 
-def _quadratic_terms(axis: str, state_index: dict[str, int]) -> list[tuple[str, str, tuple]]:
-    """`nonlinear-aero`'s terms as `(suffix, kind, state indices)` (see `_term`), in
-    `_catalogue.quadratic_names` order."""
-    xs = [state_index[s] for s in AXIS_STATES[axis]]
-    names = AXIS_STATES[axis]
-    out = []
-    for i, a in enumerate(names):
-        out.append((f"_{a}{a}", "square", (xs[i],)))
-        out.append((f"_{a}|{a}|", "abs", (xs[i],)))
-    for i in range(len(xs)):
-        for j in range(i + 1, len(xs)):
-            out.append((f"_{names[i]}{names[j]}", "cross", (xs[i], xs[j])))
-    return out
-
-
-def _term(kind: str, idx: tuple, x, ue):
-    """One extra-load term: the extra input `ue[idx[0]]` (`"input"`), the state `x[idx[0]]`
-    (`"state"`), its square, `x |x|` (`"abs"`) or the product `x[i] x[j]` (`"cross"`)."""
+def _term(kind: str, idx: tuple, x, ue, basis):
+    """One extra-load term: the extra input `ue[i]` (`"input"`), the state `x[i]`
+    (`"state"`), the product `x[i] x[j]` (`"cross"`) or `x[i] ue[j]` (`"state-input"`), or the
+    smooth component `j` of `basis` at `x[i]` (`"smooth"`), with `(i, j) = idx`."""
     if kind == "input":
         return ue[idx[0]]
     if kind == "state":
         return x[idx[0]]
-    if kind == "square":
-        return x[idx[0]] * x[idx[0]]
-    if kind == "abs":
-        return x[idx[0]] * jnp.abs(x[idx[0]])
-    return x[idx[0]] * x[idx[1]]
+    if kind == "cross":
+        return x[idx[0]] * x[idx[1]]
+    if kind == "state-input":
+        return x[idx[0]] * ue[idx[1]]
+    return basis(x[idx[0]], xp=jnp)[idx[1]]
 
 
 class Augmented(eqx.Module):
     """The augmented model's state equation (`rates=True`: Eqs. 7-8 with the extra loads
     entering as the aerodynamic ones do) or its loads (`rates=False`): `base(x, u[:1], p, c)`
-    plus, on each of the axis's loads `ld`, the sum over `terms` (`(suffix, kind, indices)`,
-    see `_term`) of `p[ld + suffix]` times the term, the extra inputs being `u[1:]`.
+    plus, on each of the axis's loads `ld`, the sum over `terms` (`(suffix, kind, indices,
+    loads, basis)`, see `_term`; `loads` those it acts on, `()` all) of `p[ld + suffix]` times
+    the term, the extra inputs being `u[1:]`.
 
     A module of static fields rather than a closure, so that the estimator's program for the
     augmented model is kept across processes like the baseline's (`fwid.estimate`'s
@@ -90,13 +83,14 @@ class Augmented(eqx.Module):
 
     base: Callable = eqx.field(static=True)
     axis: str = eqx.field(static=True)
-    terms: tuple[tuple[str, str, tuple[int, ...]], ...] = eqx.field(static=True)
+    terms: tuple[tuple, ...] = eqx.field(static=True)
     rates: bool = eqx.field(static=True)
 
     def __call__(self, x, u, p, c):
         ue = u[1:]
-        extra = [sum((p[f"{ld}{suffix}"] * _term(kind, idx, x, ue)
-                      for suffix, kind, idx in self.terms), 0.0 * x[0])
+        extra = [sum((p[f"{ld}{suffix}"] * _term(kind, idx, x, ue, basis)
+                      for suffix, kind, idx, on, basis in self.terms if not on or ld in on),
+                     0.0 * x[0])
                  for ld in AXIS_LOADS[self.axis]]
         out = self.base(x, u[:1], p, c)
         return out + (_load_rates(self.axis, extra, c) if self.rates else jnp.stack(extra))
@@ -126,10 +120,17 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
         elif name == "time-offset":
             out[f"{ctrl}_eff"] = (f"cycle-averaged {ctrl} minus its trim, shifted "
                                   f"{float(variant):g} s earlier")
-        elif name == "unsteady-aero":
-            for s in AXIS_STATES[axis]:
-                out[f"{s}_lag"] = (f"lag({s}) - {s}: {s} through a first-order lag of tau = "
-                                   f"{float(variant):g} s, minus {s}")
+        elif name == "unsteady-aero" and isinstance(variant, Lagging):
+            for ld in AXIS_LOADS[axis]:
+                qs = " + ".join(f"{g:.4g} {x}" for x, g in variant.derivatives[ld].items())
+                out[f"{ld}_lag"] = (f"the quasi-steady {ld} ({qs}, cycle-averaged states "
+                                    f"less trim) through a {variant.text()}, minus itself")
+        elif name == "nonlinear-aero" and isinstance(variant, Terms) and \
+                ctrl in variables_of(axis, variant):
+            out[f"{ctrl}_slow"] = f"cycle-averaged {ctrl} minus its trim"
+            for k in range(variant.df):
+                out[f"{ctrl}_s{k + 1}"] = (f"smooth component {k + 1} of {ctrl}_slow "
+                                          "(nonlinear-aero's spline basis)")
         elif name == "flap-frequency":
             lag = f" through a first-order lag of {float(variant):g} s" if variant else ""
             out["f_dev"] = f"f minus its median over the flight{lag}"
@@ -137,6 +138,38 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
         elif name == "drift":
             out["time"] = "time since the flight's first sample / 10 s"
             out["time2"] = "time squared"
+    return out
+
+
+def variables_of(axis: str, member: Terms) -> list[str]:
+    """The states and control `nonlinear-aero`'s `member` is a function of."""
+    return [variables(axis)[k] for k in member.which]
+
+
+def _smooth_terms(axis: str, member: Terms, state_index: dict, add_input, cutoff: float):
+    """`nonlinear-aero`'s terms (`_term`) for `member`: per state its smooth components in the
+    simulated state, per control its components of the measured cycle-averaged control (a
+    prepared input each, `add_input`), and the products of every two."""
+    ctrl = AXIS_INPUT[axis]
+    names = variables_of(axis, member)
+    out, slot = [], None
+    if ctrl in names:
+        slot = add_input(f"{ctrl}_slow", lambda fl: cycle_averaged(fl, (ctrl,), cutoff)[ctrl],
+                         term=False)
+    for x in names:
+        basis = member.bases.get(x)
+        for k in range(member.df if basis is not None else 0):
+            if x == ctrl:
+                add_input(f"{ctrl}_s{k + 1}", lambda fl, k=k, b=basis: b(
+                    cycle_averaged(fl, (ctrl,), cutoff)[ctrl])[:, k], suffix=f"_{x}{k + 1}")
+            else:
+                out.append((f"_{x}{k + 1}", "smooth", (state_index[x], k), (), basis))
+    if member.products:
+        for a, b in itertools.combinations(names, 2):
+            if b == ctrl:
+                out.append((f"_{a}{b}", "state-input", (state_index[a], slot), (), None))
+            else:
+                out.append((f"_{a}{b}", "cross", (state_index[a], state_index[b]), (), None))
     return out
 
 
@@ -161,25 +194,31 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     control = ctrl
     shift = None  # (kind, tau) applied to the control column
     extra_inputs: list[str] = []
-    terms: list[tuple[str, str, tuple]] = []  # (suffix, kind, indices) per own load (`_term`)
+    terms: list[tuple] = []  # (suffix, kind, indices, loads) per own load (`_term`)
     left_out = []
     columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
 
-    def add_input(name, column):
+    def add_input(name, column, on=(), suffix=None, term=True):
         j = len(extra_inputs)
         extra_inputs.append(name)
         if column is not None:
             columns[name] = column
-        terms.append((name, "input", (j,)))
+        if term:
+            terms.append((suffix or name, "input", (j,), tuple(on), None))
+        return j
 
     for name, variant in effects:
         if name in ("actuator-dynamics", "time-offset"):
             shift = variant if name == "actuator-dynamics" else ("delay", -float(variant))
             control = f"{ctrl}_eff"
         elif name == "unsteady-aero":
-            for s in AXIS_STATES[axis]:
-                add_input(f"{s}_lag", lambda fl, s=s, tau=float(variant): lagging_part(
-                    np.asarray(fl[s], dtype=float), fl.dt, tau))
+            if not isinstance(variant, Lagging):  # no member made for flights: no form
+                left_out.append(name)
+                continue
+            for ld in loads:
+                add_input(f"{ld}_lag", lambda fl, ld=ld, m=variant: lagging(quasi_steady(
+                    cycle_averaged(fl, unsteady_states(ld), cutoff), ld, m, fl.n), fl.dt, m),
+                          on=(ld,), suffix="_lag")
         elif name == "flap-frequency":
             tau = float(variant or 0.0)
             add_input("f_dev", lambda fl, tau=tau: frequency_deviation(
@@ -191,19 +230,19 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
             for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
                 add_input(s, None)
         elif name == "nonlinear-aero":
-            chosen = _quadratic_terms(axis, state_index)
-            if variant is not None:  # a subset of the terms (`_catalogue.QUADRATIC_SUBSETS`)
-                chosen = [chosen[k] for k in variant]
-            terms.extend(chosen)
+            if not isinstance(variant, Terms):  # no member made for flights: no form
+                left_out.append(name)
+                continue
+            terms.extend(_smooth_terms(axis, variant, state_index, add_input, cutoff))
         elif name == "drift":
             add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))
             add_input("time2", lambda fl: elapsed(np.asarray(fl.t, dtype=float)) ** 2)
         elif name == "attitude":
             k = state_index[ATTITUDE[axis]]
-            terms.append((ATTITUDE[axis], "state", (k,)))
+            terms.append((ATTITUDE[axis], "state", (k,), (), None))
         else:
             left_out.append(name)
-    new = [f"{ld}{suffix}" for suffix, _, _ in terms for ld in loads]
+    new = [f"{ld}{t[0]}" for t in terms for ld in loads if not t[3] or ld in t[3]]
     f = Augmented(base.f, axis, tuple(terms), rates=True)
     forces = Augmented(base.forces, axis, tuple(terms), rates=False)
 
@@ -219,8 +258,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     def prepare(flight: Flight) -> Flight:
         new = {k: g(flight) for k, g in columns.items()}
         if shift is not None:
-            d = np.asarray(flight[ctrl]) - float(flight.trim_value(ctrl))
-            slow = np.asarray(decompose({ctrl: d}, flight.dt, split_cutoff=cutoff).averaged[ctrl])
+            slow = cycle_averaged(flight, (ctrl,), cutoff)[ctrl]
             new[control] = actuator_filter(slow, flight.dt, shift)
         return flight.with_columns(**new) if new else flight
 

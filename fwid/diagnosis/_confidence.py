@@ -3,13 +3,9 @@
 The explanations are the baseline alone (`none`), each catalogue entry and probe alone, the
 pairs of the catalogue entries that gain most alone (`PAIR_POOL`; ordered by that gain), and
 the effects the forward selection chose together, up to its first probe (an entry after a
-probe only echoes it). An entry built on states' rates (`unsteady-aero`) stands alone: its
-columns carry the other loads of the axis (`w' = Z / m + ...`), so beside another effect it
-picks up that effect's leftover misfit, whichever of the two comes first (on flap-frequency
-flights, 5 % more held-out gain after `flap-frequency`, t = 6, with no lag in the loads; on
-time-offset flights, `unsteady-aero + time-offset`). A lagging load beside another effect is
-therefore reported as that effect. The best explanation gives the verdict (its first
-effect). Each is scored, as the selection's evidence is (`_significance.py`), by the
+probe only echoes it). Every entry is a family whose size was chosen inside the fitting
+flights, so each pairs with every other on the same terms. The best explanation gives the
+verdict (its first effect). Each is scored, as the selection's evidence is (`_significance.py`), by the
 cross-fit: on every scoring block of about a second, the model fitted on the other flights
 gives, per band, the held-out sum of squares pooled over the loads (each scaled by the
 baseline's training mean square `s_l`), and the block's loss is
@@ -21,14 +17,11 @@ exactly. A model that explains nothing only adds held-out error, so over-fitting
 larger explanation instead of helping it.
 
 Each effect of an explanation is charged the smallest held-out gain that counts,
-`-log(1 - g)` per block, with `g` the selection's `MIN_GAIN` (2 %; `RATES_MIN_GAIN`, 3 %, for
-an entry built on states' rates): the set compares explanations by the loss they would have
-if each effect had to earn that gain (an interval null: "at least 2 % better", not "better").
-Without the charge the held-out loss is not a fair judge of the rates' entry: the rates of
-the other states carry a little of the load's own noise through the kinematic terms, so on
-clean flights `unsteady-aero` gains a fraction of a per cent held out, significantly over
-tens of blocks, and would be preferred to `none` (measured on simulated 6 + 6 flights,
-`tests/diagnosis/test_confidence.py`).
+`-log(1 - g)` per block, with `g` the selection's `MIN_GAIN` (2 %): the set compares
+explanations by the loss they would have if each effect had to earn that gain (an interval
+null: "at least 2 % better", not "better"). Without the charge, an effect that fits a
+fraction of a per cent of the loads' noise significantly over tens of blocks would be
+preferred to `none`.
 
 The set is Hansen, Lunde & Nason's *model confidence set* (Econometrica 79, 2011, 453-497)
 with their `T_max` statistic: while the live models differ significantly (the largest
@@ -61,15 +54,15 @@ import numpy as np
 
 from ._attribution import Engine, Model
 from ._catalogue import Effect
-from ._selection import MIN_GAIN, RATES_MIN_GAIN
+from ._selection import MIN_GAIN
 from ._significance import Evidence, Half, evidence
 
 #: Level of the set: an explanation is kept when its MCS p value is at least this.
 LEVEL = 0.10
 #: Bootstrap resamples of the blocks.
 RESAMPLES = 2000
-#: Pairs are formed from this many catalogue entries not built on states' rates, those with
-#: the largest held-out gain alone (a positive one): a pair both of whose members explain
+#: Pairs are formed from this many catalogue entries, those with the largest held-out gain
+#: alone (a positive one): a pair both of whose members explain
 #: nothing alone is not tried.
 PAIR_POOL = 4
 
@@ -91,8 +84,7 @@ class Explanation:
     @property
     def charge(self) -> float:
         """Per block, the smallest gains its effects must earn (module docstring)."""
-        return float(sum(-np.log1p(-(RATES_MIN_GAIN if e.rates else MIN_GAIN))
-                         for e in self.effects))
+        return float(-np.log1p(-MIN_GAIN) * len(self.effects))
 
     @property
     def mean_loss(self) -> float:
@@ -177,17 +169,14 @@ def explanations(engine: Engine, halves: Sequence[Half], first: dict[str, Eviden
     for e in candidates:
         models = [((e, v),) for v in first[e.name].variants]
         out.append(Explanation((e,), _block_losses(engine, halves, models, cache)))
-    # an entry built on states' rates stands alone: its columns carry the other loads of the
-    # axis (`w' = Z / m + ...`), so beside another effect it picks up that effect's leftover
-    # misfit, whichever comes first (module docstring)
-    gaining = sorted((e for e in candidates if not e.probe and not e.rates
+    gaining = sorted((e for e in candidates if not e.probe
                       and first[e.name].mean > 0), key=lambda e: -first[e.name].mean)[:pair_pool]
     groups = [tuple(p) for p in itertools.combinations(gaining, 2)]
     # the selection's effects up to its first probe: an entry after a probe only echoes it
-    # (`_diagnose.py` reports it so, under `unexplained`)
+    # (`_scores.Scores.named` reports it so, under `unexplained`)
     upto = next((k + 1 for k, e in enumerate(chosen) if e.probe), len(chosen))
     chosen = tuple(chosen)[:upto]
-    if len(chosen) > 1 and chosen not in groups and not any(e.rates for e in chosen):
+    if len(chosen) > 1 and chosen not in groups:
         groups.append(chosen)
     for group in groups:
         models = []

@@ -3,25 +3,23 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Sequence
 
-import numpy as np
-
 from ..data import Flight
-from ._attribution import Engine, units, unwrap
-from ._catalogue import CATALOGUE, Effect, filter_text, quadratic_names
-from ._confidence import LEVEL, as_rows, confidence_set, explanations, next_flight, sequential
-from ._disturbance import RED_MIN, colour, rates_proxy, spectrum
-from ._gapmap import BAND_NAMES, band_energy, gap_map, rms
-from ._probes import PROBES, drivers
-from ._provenance import provenance
-from ._process_noise import process_noise as fit_process_noise
+from ._attribution import unwrap
 from ._augment import IN_EOM
+from ._campaign import Campaign, campaign
+from ._catalogue import CATALOGUE, Effect
+from ._confidence import LEVEL, as_rows, confidence_set, explanations, next_flight, sequential
+from ._disturbance import RED_MIN, whitens
+from ._gapmap import gap_map
+from ._probes import PROBES
+from ._process_noise import process_noise as fit_process_noise
+from ._provenance import provenance
+from ._scores import Scores
+from ._selection import ALPHA, MIN_GAIN, Selection, forward_select
+from ._significance import BLOCK_S
 from ._simulation import EarlyFits, SimulationGap, simulation_gap, start_baseline
-from ._selection import ALPHA, MIN_GAIN, forward_select
-from ._significance import BLOCK_S, cross_fit_folds, scoring_blocks
-from ._signals import AXIS_LOADS, BANDS, LOADS, check_axis, check_excitation, signals
 
 
 @dataclasses.dataclass
@@ -34,11 +32,9 @@ class Diagnosis:
     otherwise), `candidates` (the catalogue, ranked, best first; the keys of `diagnosis.json`
     on the guide's 'Formats and interfaces' page), `probes`
     (the same for the structure outside the catalogue), `unexplained` (what the
-    first probe selected says: drivers and shrink; `None` when no probe is selected, or when
-    it came first after a proxy of a disturbance was set aside),
+    first probe selected says: drivers and shrink; `None` when no probe is selected),
     `localisation` (the gap map of the baseline on the test flights), `rounds` (the forward
-    selection's trace (after a proxy of a disturbance was set aside, the second selection's;
-    the proxy is in `disturbance["proxy"]`): per round its per-candidate level, every
+    selection's trace: per round its per-candidate level, every
     candidate's `p`, `t`,
     `gain_pct` and `blocks`, and the effect it `added`, `None` in the round that stopped; why
     a candidate was or was not added), and the held-out load residuals before (`residuals`)
@@ -115,23 +111,6 @@ class Diagnosis:
         }
 
 
-def _variant_text(v, axis: str = "lon") -> str | None:
-    v = unwrap(v)
-    if v is None:
-        return None
-    if isinstance(v, float):  # a time constant or lead (0: at once)
-        return f"{v:g} s" if v else "at once"
-    if all(isinstance(k, int) for k in v):  # a subset of nonlinear-aero's terms
-        names = quadratic_names(axis)
-        return "terms " + ", ".join(names[k] for k in v)
-    return filter_text(v)
-
-
-#: A load is affected by an effect when its held-out gain is at least this share of the
-#: largest gain over the loads.
-AFFECTED_SHARE = 0.25
-
-
 def diagnose(
     train: Sequence[Flight],
     test: Sequence[Flight],
@@ -187,12 +166,13 @@ def diagnose(
     4. **Nothing named**: the colour of the held-out residual tells a
        disturbance nothing measured predicts (`"random-disturbance"`: red, as gusts make it)
        from measurement noise (`"none"`: the model is adequate, up to the detection limit).
-       A probe that leaves the residual red was a proxy of a disturbance, not structure; so
-       was a catalogue entry built on states' rates (`unsteady-aero`), selected first, that
-       leaves it red (`disturbance["proxy"]` says which): it is set aside with all that
-       entered after it, and the selection runs again without such entries, which may name
-       the catalogue effects the disturbance hid (`random-disturbance` when it names none
-       first: a probe would track the disturbance too).
+       An explanation built on the states' dynamics (a probe, or an entry whose columns
+       filter the measured states, `Effect.filters_states`: `unsteady-aero`) that leaves the
+       held-out residual about as red as before was a proxy of a disturbance, not structure
+       (`random-disturbance`; the entries it named are in `disturbance["leaves_red"]`;
+       `_disturbance.whitens`): a disturbance drives the states. Otherwise no catalogue
+       entry has a rule of its own: each family's size is chosen inside the training
+       flights, so all compete on held-out loss alone.
 
     `verdict` is the first effect of the confidence set's best explanation (least held-out
     loss, each effect charged its smallest gain; `effects` are its catalogue effects, a probe
@@ -219,215 +199,32 @@ def diagnose(
     `progress` (called with a line of text at each stage).
     """
     say = progress or (lambda msg: None)
-    check_axis(train, axis, "training")
-    check_axis(test, axis, "test")
-    flights = list(train) + list(test)
-    loads = tuple(ld for ld in LOADS if all(ld in f for f in flights))
-    loads = tuple(ld for ld in loads if ld in AXIS_LOADS[axis]) + tuple(
-        ld for ld in loads if ld not in AXIS_LOADS[axis])
-    say(f"decomposing {len(train)} training and {len(test)} test flights")
-    tr_sig = [signals(f, cutoff=cutoff) for f in train]
-    te_sig = [signals(f, cutoff=cutoff) for f in test]
-    check_excitation(tr_sig, axis)
+    c = campaign(train, test, axis, cutoff, catalogue, probes, folds, say)
     baseline = start_baseline(train, test, axis, cutoff) if simulation else None
-    tr_blocks, tr_par = scoring_blocks(tr_sig, 0)
-    te_blocks, te_par = scoring_blocks(te_sig, len(tr_sig))
-    engine = Engine(units(tr_sig + te_sig) + units(tr_blocks + te_blocks, tr_par + te_par),
-                    loads, tuple(catalogue) + tuple(probes), own=AXIS_LOADS[axis])
-    n_tr, n_te, n_trb = len(tr_sig), len(te_sig), len(tr_blocks)
-    train_idx = tuple(range(n_tr))
-    test_idx = tuple(range(n_tr, n_tr + n_te))
-    trb_idx = tuple(range(n_tr + n_te, n_tr + n_te + n_trb))
-    teb_idx = tuple(range(n_tr + n_te + n_trb, len(engine.units)))
-    sigma2 = engine.mean_square(train_idx)
-    halves = cross_fit_folds(engine, n_tr + n_te, [p for p, _ in tr_par + te_par], n_tr,
-                             folds)
-
-    say(f"testing {len(catalogue)} candidates and {len(probes)} probes by cross-fit over "
-        f"{len(trb_idx) + len(teb_idx)} blocks, forward selection")
     early = EarlyFits(train, test, axis, cutoff) if simulation else None
-
-    def on_first(e: Effect) -> None:  # the leader's augmented fit starts now (`EarlyFits`)
-        if early is not None and e.name in IN_EOM and not e.probe:
-            early.start([(e.name, unwrap(engine.choose(train_idx, (), e, sigma2)))])
-
-    sel = forward_select(engine, halves, tuple(catalogue) + tuple(probes), alpha, min_gain,
-                         on_first=on_first)
-
+    sel = select(c, alpha, min_gain, early, say)
     say("re-fitting on the training flights, scoring on the test flights")
-
-    def test_residuals(model):
-        out = [{} for _ in test_idx]
-        for band in BANDS:
-            for ch in engine.channels(band):
-                th, _ = engine.fit(train_idx, ch, model)
-                for j, i in enumerate(test_idx):
-                    out[j][ch] = engine.residual(i, ch, th, model)
-        return out
-
-    def full(res):
-        return {ld: res[(ld, "averaged")] + res[(ld, "flapping")] for ld in loads}
-
-    def rms_by_load(res_full):
-        return {ld: rms(np.concatenate([r[ld] for r in res_full])) for ld in loads}
-
-    def shrink(before, after, affected):
-        ratio = np.mean([(after[ld] / before[ld]) ** 2 for ld in affected])
-        return 100.0 * (1.0 - math.sqrt(ratio))
-
-    def affected_loads(ev):
-        """Loads whose cross-fitted held-out error drops by at least `min_gain` and by a
-        quarter of the largest drop (the loads the effect is about, not those it grazes)."""
-        gains = ev.load_gain()
-        top = max(gains.values())
-        hit = [ld for ld in loads if gains[ld] >= max(min_gain, AFFECTED_SHARE * top)]
-        return hit or [max(gains, key=gains.get)]
-
-    base_res = test_residuals(())
-    before = [full(r) for r in base_res]
-    rms_before = rms_by_load(before)
-    own = [ld for ld in loads if ld in AXIS_LOADS[axis]]
-    dts = [s.dt for s in te_sig]
-    own_scale = {ld: sigma2[(ld, "averaged")] for ld in own}
-
-    def slow_part(res):
-        return [{ld: r[(ld, "averaged")] for ld in own} for r in res]
-
-    named = {e.name for e in catalogue}
-
-    def name_effects(sel):
-        """The rows of the catalogue effects `sel` chose (`effects`), what its first probe says
-        (`unexplained`), and the `(name, variant)` of the effects for the simulation."""
-        effects, unexplained, model, prev, in_sim = [], None, (), rms_before, []
-        for e, ev in sel.chosen:
-            model = model + ((e, engine.choose(train_idx, model, e, sigma2)),)
-            res = test_residuals(model)
-            now = rms_by_load([full(r) for r in res])
-            affected = affected_loads(ev)
-            row = {"effect": e.name, "variant": _variant_text(model[-1][1], axis),
-                   "acts_on": list(model[-1][1].loads), "p": ev.p, "affected": affected,
-                   "shrink_pct": shrink(prev, now, affected),
-                   "test_rms_before": prev, "test_rms_after": now}
-            prev = now
-            if e.rates and not effects and unexplained is None:
-                row["redness_after"] = colour(slow_part(res), dts, own, own_scale)["redness"]
-                row["shortest_lag"] = unwrap(model[-1][1]) == min(e.variants)
-            if e.name in named and unexplained is None:
-                first = sel.chosen[0][1]
-                row["relative_gain"] = ev.gain / first.gain if first.gain > 0 else 1.0
-                effects.append(row)
-                in_sim.append((e.name, unwrap(model[-1][1])))
-            elif e.name in named:  # after structure outside the catalogue: it may only echo it
-                unexplained["then"].append(row)
-            elif unexplained is None:
-                unexplained = {"probe": e.name, "description": e.description,
-                               "drivers": drivers(engine, train_idx, e, model[-1][1], sigma2),
-                               "test_shrink_pct": row["shrink_pct"], "p": ev.p,
-                               "variant": row["variant"], "affected": affected,
-                               "redness_after": colour(slow_part(res), dts, own,
-                                                       own_scale)["redness"], "then": []}
-        return effects, unexplained, in_sim
-
-    disturbance = colour(slow_part(base_res), dts, own, own_scale)
-    disturbance.update(spectrum(slow_part(base_res), dts, own), red_min=RED_MIN)
-    effects, unexplained, in_sim = name_effects(sel)
-    set_aside = sel
-    if effects and rates_proxy(effects[0], disturbance):
-        # an entry built on states' rates that leaves the residual red, or that takes its
-        # shortest lag (a rate) on a red residual, tracked a disturbance: set aside, with all
-        # that entered after it (it may track the proxy's leftovers); the selection is run
-        # again without such entries, which may find the effects the disturbance hid
-        proxy = effects[0]
-        disturbance["proxy"] = {k: proxy[k] for k in ("effect", "variant", "p", "shrink_pct",
-                                                       "redness_after", "shortest_lag")}
-        say(f"{proxy['effect']} tracked a disturbance: selecting again without it")
-        sel = forward_select(engine, halves, [e for e in tuple(catalogue) + tuple(probes)
-                                              if not e.rates], alpha, min_gain)
-        effects, unexplained, in_sim = name_effects(sel)
-        if not effects:  # a probe first on the same residual tracks the disturbance too
-            unexplained = None
+    scores = Scores(c, min_gain)
+    disturbance = scores.disturbance()
     say("the confidence set of explanations (model confidence set over the held-out blocks)")
-    # an entry built on rates set aside as a proxy of a disturbance explains nothing here
-    pool = tuple(e for e in tuple(catalogue) + tuple(probes)
-                 if not (e.rates and "proxy" in disturbance))
-    found = explanations(engine, halves, set_aside.first, pool, [e for e, _ in sel.chosen])
-    best = confidence_set(found)
-    if [e.name for e in best[0].effects] != [e.name for e, _ in sel.chosen]:
-        # the verdict is the best explanation's: its effects as if selected in that order
-        sel = dataclasses.replace(sel, chosen=sequential(engine, halves, set_aside.first,
-                                                         best[0].effects))
-        effects, unexplained, in_sim = name_effects(sel)
-        if effects and effects[0].get("redness_after") is not None and rates_proxy(
-                effects[0], disturbance):  # as above: a proxy of a disturbance
-            disturbance["proxy"] = {k: effects[0][k] for k in (
-                "effect", "variant", "p", "shrink_pct", "redness_after", "shortest_lag")}
-            found = [x for x in found if not any(e.rates for e in x.effects)]
-            best = confidence_set(found)
-            sel = dataclasses.replace(sel, chosen=sequential(engine, halves, set_aside.first,
-                                                             best[0].effects))
-            effects, unexplained, in_sim = name_effects(sel)
-        if "proxy" in disturbance and not effects:  # a probe tracks the disturbance too
-            unexplained = None
-    kept = as_rows(best, found[0])
-    chosen = [e.name for e, _ in sel.chosen]
-    last, levels = {**set_aside.last, **sel.last}, {**set_aside.level, **sel.level}
-    augmented: dict = {}
-
-    def describe(e: Effect) -> dict:
-        ev = last[e.name]
-        variant = engine.choose(train_idx, (), e, sigma2)
-        after_band = test_residuals(((e, variant),))
-        after_res = [full(r) for r in after_band]
-        augmented[e.name] = after_res
-        rms_after = rms_by_load(after_res)
-        in_band = {ld: (rms(np.concatenate([r[(ld, e.band)] for r in base_res])),
-                        rms(np.concatenate([r[(ld, e.band)] for r in after_band])))
-                   for ld in loads}
-        affected = affected_loads(ev)
-        eb = sum(band_energy(r[ld], s) for r, s in zip(before, te_sig) for ld in affected)
-        ea = sum(band_energy(r[ld], s) for r, s in zip(after_res, te_sig) for ld in affected)
-        band_drop = {b: 100.0 * (1.0 - a / x) if x > 0 else 0.0
-                     for b, x, a in zip(BAND_NAMES, eb, ea)}
-        level = levels[e.name]
-        return {
-            "effect": e.name,
-            "significant": e.name in chosen,
-            "shrink_pct": shrink(rms_before, rms_after, affected),
-            "test_rms_before": rms_before,
-            "test_rms_after": rms_after,
-            "affected": affected,
-            "band": e.band,
-            "variant": _variant_text(variant, axis),
-            "acts_on": list(variant.loads),
-            "p": ev.p,
-            "confidence": max(0.0, 1.0 - ev.p * alpha / level),
-            "detection_limit_pct": 100.0 * ev.detection_limit(level),
-            "band_shrink_pct": band_drop,
-            "test_rms_in_band": {ld: {"before": b, "after": a} for ld, (b, a) in in_band.items()},
-            "evidence": ev.as_dict(level),
-            "description": e.description,
-        }
-
-    order = {name: k for k, name in enumerate(chosen)}
-
-    def ranked(effects):
-        out = [describe(e) for e in effects]
-        out.sort(key=lambda c: (order.get(c["effect"], len(order)), c["p"]))
-        return out
-
-    candidates, probe_rows = ranked(catalogue), ranked(probes)
-    verdict = effects[0]["effect"] if effects else "unexplained" if unexplained else "none"
-    # a probe that leaves the residual as red as a disturbance found a proxy of it (a state
-    # that integrates the disturbance), not structure; nothing at all found and a red
-    # residual: a disturbance nothing measured predicts
-    if verdict == "unexplained" and unexplained["redness_after"] >= RED_MIN:
-        verdict = "random-disturbance"
-    elif verdict == "none" and (disturbance["redness"] >= RED_MIN or "proxy" in disturbance):
-        verdict = "random-disturbance"
+    sel, kept = explain(c, sel)
+    effects, unexplained, in_sim = scores.named(sel)
+    tracking = {e.name for e in c.candidates if e.filters_states or e.probe}
+    if effects and tracking & {e["effect"] for e in effects} and not whitens(
+            disturbance["redness"], effects[-1]["redness_after"]):
+        # an explanation built on the states' dynamics that leaves the residual about as
+        # red as before: it tracked a disturbance that drove the states
+        disturbance["leaves_red"] = {"effects": [e["effect"] for e in effects],
+                                     "redness_after": effects[-1]["redness_after"]}
+        effects, unexplained, in_sim = [], None, []
+    kept = adequate(kept, scores, disturbance["redness"], tracking)
+    candidates = scores.ranked(c.catalogue, sel, alpha)
+    probe_rows = scores.ranked(c.probes, sel, alpha)
+    verdict = verdict_of(effects, unexplained, disturbance)
     if verdict == "unexplained":
         probe = next(e for e, _ in sel.chosen if e.name == unexplained["probe"])
-        in_sim = [(probe.name, engine.best_variant(train_idx, (), probe, sigma2))]
-    elif verdict not in named:
+        in_sim = [(probe.name, c.engine.best_variant(c.train_idx, (), probe, c.sigma2))]
+    elif verdict not in {e.name for e in c.catalogue}:
         in_sim = []
     noise_block = None
     if process_noise and verdict == "random-disturbance":
@@ -439,20 +236,18 @@ def diagnose(
             + " fitted by output error on the training flights, simulated on the test flights")
         sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result(),
                              augmented=early.get(in_sim))
-
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,
                "candidates": {k: {"p": ev.p, "t": ev.t, "gain_pct": 100.0 * ev.gain,
                                   "blocks": ev.n} for k, ev in evs.items()}}
               for lv, evs, added in sel.rounds]
-    measured = [{ld: s.loads["averaged"][ld] + s.loads["flapping"][ld] for ld in loads}
-                for s in te_sig]
-    localisation = gap_map(te_sig, before, measured, axis)
+    measured = [{ld: s.loads["averaged"][ld] + s.loads["flapping"][ld] for ld in c.loads}
+                for s in c.te_sig]
     return Diagnosis(
         axis=axis,
         train=[f.name for f in train],
         test=[f.name for f in test],
-        folds=[engine.units[i].signals.name for i in trb_idx + teb_idx],
+        folds=[c.engine.units[i].signals.name for i in c.block_idx],
         verdict=verdict,
         effects=effects,
         candidates=candidates,
@@ -462,34 +257,99 @@ def diagnose(
         simulation=sim.summary if sim is not None else None,
         process_noise=noise_block,
         models=sim,
-        first_round={k: {x: c[x] for x in ("p", "gain_pct", "t")}
-                     for k, c in (rounds[0]["candidates"] if rounds else {}).items()},
+        first_round={k: {x: r[x] for x in ("p", "gain_pct", "t")}
+                     for k, r in (rounds[0]["candidates"] if rounds else {}).items()},
         rounds=rounds,
-        localisation=localisation,
-        residuals=before,
-        augmented=augmented,
+        localisation=gap_map(c.te_sig, scores.before, measured, axis),
+        residuals=scores.before,
+        augmented=scores.augmented,
         measured=measured,
         confidence_set=kept,
-        states=provenance([f.name for f in flights], reconstruction),
-        settings={
-            "baseline": "Eqs. 2-6 below the split + Eq. 12 (3 harmonics) above it, "
-                        "per-flight trim and Fourier coefficients, equation error",
-            "split_hz": cutoff,
-            "significance": ("cross-fit (fit on training, score test blocks; fit on test, "
-                             "score training blocks)" if len(halves) == 2 else
-                             f"cross-fit over {len(halves)} folds of flights (each fold's "
-                             "blocks scored by the model fitted on the other flights)")
-                            + ", loads pooled per candidate, one-sided t test on "
-                            "per-block log error ratios, forward selection at alpha / "
-                            "candidates in play",
-            "alpha": alpha,
-            "min_gain_pct": 100 * min_gain,
-            "block_s": BLOCK_S,
-            "confidence_level": LEVEL,
-            "confidence_set": f"model confidence set (Hansen, Lunde & Nason 2011, T_max, "
-                              f"block bootstrap over the scoring blocks) at level {LEVEL:g} "
-                              f"over none, each candidate and probe, pairs and the selection",
-            "blocks": len(trb_idx) + len(teb_idx),
-            "loads": list(loads),
-        },
+        states=provenance([f.name for f in c.train + c.test], reconstruction),
+        settings=_settings(c, alpha, min_gain),
     )
+
+
+def select(c: Campaign, alpha: float, min_gain: float, early: EarlyFits | None,
+           say: Callable[[str], None]) -> Selection:
+    """Which effects: forward selection over the catalogue and the probes by cross-fit
+    (`_selection.py`); the first round's leader starts its augmented fit at once (`early`)."""
+    say(f"testing {len(c.catalogue)} candidates and {len(c.probes)} probes by cross-fit over "
+        f"{len(c.block_idx)} blocks, forward selection")
+
+    def on_first(e: Effect) -> None:
+        if early is not None and e.name in IN_EOM and not e.probe:
+            early.start([(e.name, unwrap(c.engine.choose(c.train_idx, (), e, c.sigma2)))])
+
+    return forward_select(c.engine, c.halves, c.candidates, alpha, min_gain,
+                          on_first=on_first)
+
+
+def explain(c: Campaign, sel: Selection) -> tuple[Selection, list[dict]]:
+    """The confidence set of explanations (`_confidence.py`) and the selection re-ordered as
+    its best explanation (its effects as if selected in that order) when they differ."""
+    found = explanations(c.engine, c.halves, sel.first, c.candidates,
+                         [e for e, _ in sel.chosen])
+    best = confidence_set(found)
+    if [e.name for e in best[0].effects] != [e.name for e, _ in sel.chosen]:
+        sel = dataclasses.replace(sel, chosen=sequential(c.engine, c.halves, sel.first,
+                                                         best[0].effects))
+    return sel, as_rows(best, found[0])
+
+
+def adequate(kept: list[dict], scores: Scores, before: float, tracking: set) -> list[dict]:
+    """The confidence set without the explanations that track a disturbance: those holding
+    an entry built on the states' dynamics or a probe (`tracking`) that do not whiten the
+    residual (`whitens`, the verdict's test; each such row carries its `redness_after`);
+    `before`: the baseline residual's redness."""
+    out = []
+    for row in kept:
+        if tracking & set(row["explanation"]):
+            row["redness_after"] = scores.redness_of(row["explanation"])
+            if not whitens(before, row["redness_after"]):
+                continue
+        out.append(row)
+    return out
+
+
+def verdict_of(effects: list[dict], unexplained: dict | None, disturbance: dict) -> str:
+    """The first catalogue effect named; else `"unexplained"` when a probe predicts the gap
+    and whitens the residual (`whitens`); else the residual's colour: `"random-disturbance"`
+    when red, or when an explanation was found that does not whiten it
+    (`disturbance["leaves_red"]`, catalogue entries; for a probe, `unexplained`): a
+    disturbance drives the states, so functions of them predict part of it (its proxy), but
+    what is left stays as red, where a deterministic effect, once fitted, leaves the noise.
+    The same adequacy test for every explanation; `"none"` when white."""
+    if effects:
+        return effects[0]["effect"]
+    if unexplained is not None and whitens(disturbance["redness"],
+                                           unexplained["redness_after"]):
+        return "unexplained"
+    red = (disturbance["redness"] >= RED_MIN or unexplained is not None
+           or "leaves_red" in disturbance)
+    return "random-disturbance" if red else "none"
+
+
+def _settings(c: Campaign, alpha: float, min_gain: float) -> dict:
+    """`diagnosis.json`'s `method`: how the diagnosis was made."""
+    return {
+        "baseline": "Eqs. 2-6 below the split + Eq. 12 (3 harmonics) above it, "
+                    "per-flight trim and Fourier coefficients, equation error",
+        "split_hz": c.cutoff,
+        "significance": ("cross-fit (fit on training, score test blocks; fit on test, "
+                         "score training blocks)" if len(c.halves) == 2 else
+                         f"cross-fit over {len(c.halves)} folds of flights (each fold's "
+                         "blocks scored by the model fitted on the other flights)")
+                        + ", loads pooled per candidate, one-sided t test on "
+                        "per-block log error ratios, forward selection at alpha / "
+                        "candidates in play",
+        "alpha": alpha,
+        "min_gain_pct": 100 * min_gain,
+        "block_s": BLOCK_S,
+        "confidence_level": LEVEL,
+        "confidence_set": f"model confidence set (Hansen, Lunde & Nason 2011, T_max, "
+                          f"block bootstrap over the scoring blocks) at level {LEVEL:g} "
+                          f"over none, each candidate and probe, pairs and the selection",
+        "blocks": len(c.block_idx),
+        "loads": list(c.loads),
+    }

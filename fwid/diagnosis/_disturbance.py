@@ -66,17 +66,12 @@ def spectrum(residuals: Sequence[dict], dts: Sequence[float], loads: Sequence[st
     return {"rms": size, "bands_hz": [list(b) for b in SPECTRUM_HZ], "psd": psd}
 
 
-def rates_proxy(row: dict, disturbance: dict) -> bool:
-    """Did an entry built on states' rates (`unsteady-aero`), selected first, only stand in
-    for a disturbance? Yes when it leaves the residual red (`redness_after >= RED_MIN`), or
-    when the baseline's residual was red and the entry took its shortest lag
-    (`row["shortest_lag"]`): the lagging part `lag(x) - x` is then `-tau x'` to within
-    `omega tau` (6 % at 1 Hz for 0.01 s), the rate of a state, which carries the other loads
-    and so a gust's too (Section III), and it can whiten the residual it explains. On the
-    development half of `benchmarks/diagnosis_power.py` no true `unsteady-aero` case met the
-    second condition (3 took the shortest lag, all with a white baseline residual); on gusts
-    from a simulator that is not fwid's, it was what `unsteady-aero` was named for (4/4,
-    residual redness 6.9-17.7 before, 1.0 after)."""
-    if row.get("redness_after", 0.0) >= RED_MIN:
-        return True
-    return bool(row.get("shortest_lag")) and disturbance.get("redness", 0.0) >= RED_MIN
+def whitens(before: float, after: float) -> bool:
+    """Does an explanation that turns a residual of redness `before` into one of `after`
+    explain structure rather than track a disturbance? Yes when what it leaves is white
+    (`after < RED_MIN`), or when it cuts the redness by the same factor at least (a
+    deterministic effect, once fitted, takes the low-frequency power it put there; a proxy
+    of a disturbance, a function of the states the disturbance drove, leaves the residual
+    about as red as before). The one adequacy test of every explanation, catalogue entry or
+    probe."""
+    return after < RED_MIN or after * RED_MIN <= before

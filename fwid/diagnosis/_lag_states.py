@@ -1,17 +1,19 @@
-"""`unsteady-aero`'s augmented model with its lags inside: the lagging part of the states made
-from the model's own simulated states rather than read from the measured ones.
+"""`unsteady-aero`'s augmented model with its lags inside: the lagging part of the
+quasi-steady loads made from the model's own simulated states rather than the measured ones.
 
-`augment` gives `unsteady-aero` the lagging part `lag(x) - x` of the axis's *measured* states
-as prepared inputs (`u_lag`, `w_lag`, `q_lag`), as the output-error fit (Eqs. 10-11) reads
-them from the flight. A model that has to predict a flight not yet flown (the discriminating
-design) has no measured states: the lag becomes a state `z_s` per lagged state `x_s`,
+`augment` gives `unsteady-aero` the lagging part of each load's quasi-steady load (the
+diagnosed derivatives on the axis's measured states, through the diagnosed filter) as a
+prepared input (`X_lag`, `Z_lag`, `M_lag`), as the output-error fit (Eqs. 10-11) reads them
+from the flight. A model that has to predict a flight not yet flown (the discriminating
+design) has no measured states: each filter stage becomes a state `z_lk` per load `l`,
 
-    dz_s/dt = (x_s - z_s) / tau,
+    dz_lk/dt = (qs_l(x) - z_lk) / tau_k,    qs_l(x) = sum_s g_ls x_s,
 
-started steady (`z_s = x_s`), and the term `z_s - x_s` enters the loads through the fitted
-coefficients (`Mw_lag`, ...) exactly where the prepared input did. The outputs stay those of
-the model with inputs (the extra states are not outputs), so both models of a discriminating
-pair compare the same outputs.
+started steady (`z = qs`), and the term `sum_k share_k z_lk - qs_l` enters the load through
+its fitted coefficient exactly where the prepared input did (one stage for a first-order
+lag, two for the indicial form; a pure delay has no finite state and is refused). The
+outputs stay those of the model with inputs (the extra states are not outputs), so both
+models of a discriminating pair compare the same outputs.
 
 The other extra inputs of the augmented models are not functions of this axis's states (the
 other axis's states, the flapping frequency, the time): they stay inputs.
@@ -26,67 +28,85 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models import GreyBoxModel
-from ._signals import AXIS_STATES
+from ._catalogue.unsteady_aero import WAGNER_RATIO, WAGNER_SHARES, Lagging
+from ._signals import AXIS_LOADS
+
+
+def stages(member: Lagging) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The filter's first-order stages: their time constants and shares."""
+    if member.kind == "lag":
+        return (member.tau,), (1.0,)
+    if member.kind == "indicial":
+        return (member.tau, WAGNER_RATIO * member.tau), WAGNER_SHARES
+    raise ValueError(f"lag_states: a {member.text()} has no finite state form; the design "
+                     "needs a lag or the indicial form")
 
 
 class _Internal(eqx.Module):
     """`fn(x, u, p, c)` of the model with inputs (its state equation `rates=True`, output
     equation or force model `rates=False`), evaluated on the first `n` states, with the
     model's inputs rebuilt: the remaining ones from `u` (at `keep`), the lag inputs (at
-    `slots`) as `z - x[src]`; with `rates`, the lag states' rates appended."""
+    `slots`) as `sum_k shares_k z_jk - qs_j(x)` with `qs_j = weights_j . x`; with `rates`, the
+    lag states' rates appended (slot-major: slot `j`'s stages are together)."""
 
     fn: Callable | None = eqx.field(static=True)  # None: the identity output
     n: int = eqx.field(static=True)
-    src: tuple[int, ...] = eqx.field(static=True)
+    weights: tuple[tuple[float, ...], ...] = eqx.field(static=True)
     slots: tuple[int, ...] = eqx.field(static=True)
     keep: tuple[int, ...] = eqx.field(static=True)
-    tau: float = eqx.field(static=True)
+    taus: tuple[float, ...] = eqx.field(static=True)
+    shares: tuple[float, ...] = eqx.field(static=True)
     rates: bool = eqx.field(static=True)
 
     def __call__(self, x, u, p, c):
-        xs, z = x[: self.n], x[self.n:]
-        lagging = xs[np.asarray(self.src, dtype=int)]
+        xs = x[: self.n]
         if self.fn is None:
             return xs
+        k = len(self.taus)
+        z = x[self.n:].reshape(len(self.slots), k)
+        qs = jnp.asarray(np.asarray(self.weights)) @ xs
         full = jnp.zeros(len(self.keep) + len(self.slots), dtype=x.dtype)
         if self.keep:
             full = full.at[np.asarray(self.keep, dtype=int)].set(u)
-        full = full.at[np.asarray(self.slots, dtype=int)].set(z - lagging)
+        full = full.at[np.asarray(self.slots, dtype=int)].set(
+            z @ jnp.asarray(self.shares) - qs)
         out = self.fn(xs, full, p, c)
-        return jnp.concatenate([out, (lagging - z) / self.tau]) if self.rates else out
+        if not self.rates:
+            return out
+        return jnp.concatenate([out, ((qs[:, None] - z) / jnp.asarray(self.taus)).ravel()])
 
 
-def lag_states(model: GreyBoxModel, axis: str, tau: float) -> GreyBoxModel:
-    """The augmented model `model` (from `augment(axis, [("unsteady-aero", tau), ...])`, fitted
-    or not) with its lag inputs `{s}_lag` replaced by lag states `{s}_lagged`.
+def lag_states(model: GreyBoxModel, axis: str, member: Lagging) -> GreyBoxModel:
+    """The augmented model `model` (from `augment(axis, [("unsteady-aero", member), ...])`,
+    fitted or not) with its lag inputs `{load}_lag` replaced by lag states.
 
     **Arguments:**
-    - `model`: the augmented model; its inputs `u_lag`, ... (`AXIS_STATES[axis]`) are
-      `lag(x) - x` of its own states through a first-order lag of `tau`.
+    - `model`: the augmented model; its inputs `X_lag`, ... are the lagging parts of the
+      quasi-steady loads (`member.derivatives`) through `member`'s filter.
     - `axis`: `"lon"` or `"lat"`.
-    - `tau`: the diagnosed time constant [s].
+    - `member`: the diagnosed filter (`Lagging`, a lag or the indicial form).
 
-    **Returns:** a [`fwid.GreyBoxModel`][] with the states `model.states` then one lag state per
-    lagged state (start them at the lagged state, e.g. zero at trim), the inputs `model`'s
-    other inputs, the same parameters, outputs and force names.
+    **Returns:** a [`fwid.GreyBoxModel`][] with the states `model.states` then the lag states
+    (`{load}_lag{k}`: start them at the quasi-steady load, e.g. zero at trim), the inputs
+    `model`'s other inputs, the same parameters, outputs and force names.
     """
-    tau = float(tau)
-    if not tau > 0:
-        raise ValueError(f"lag_states: the time constant must be positive, got {tau}")
-    lagged = [s for s in AXIS_STATES[axis] if f"{s}_lag" in model.inputs]
-    if not lagged:
+    taus, shares = stages(member)
+    loads = [ld for ld in AXIS_LOADS[axis] if f"{ld}_lag" in model.inputs]
+    if not loads:
         raise ValueError(f"lag_states: {model.name} has no lag inputs "
-                         f"({', '.join(f'{s}_lag' for s in AXIS_STATES[axis])})")
-    slots = tuple(model.inputs.index(f"{s}_lag") for s in lagged)
+                         f"({', '.join(f'{ld}_lag' for ld in AXIS_LOADS[axis])})")
+    slots = tuple(model.inputs.index(f"{ld}_lag") for ld in loads)
     keep = tuple(k for k in range(len(model.inputs)) if k not in slots)
-    src = tuple(model.states.index(s) for s in lagged)
     n = len(model.states)
+    weights = tuple(tuple(float(member.derivatives.get(ld, {}).get(s, 0.0))
+                          for s in model.states) for ld in loads)
 
     def wrap(fn, rates):
-        return _Internal(fn, n, src, slots, keep, tau, rates)
+        return _Internal(fn, n, weights, slots, keep, tuple(taus), tuple(shares), rates)
 
     return GreyBoxModel(
-        wrap(model.f, True), states=model.states + tuple(f"{s}_lagged" for s in lagged),
+        wrap(model.f, True), states=model.states + tuple(
+            f"{ld}_lag{k + 1}" for ld in loads for k in range(len(taus))),
         inputs=tuple(model.inputs[k] for k in keep),
         params={k: model.params[k] for k in model.param_names},
         h=wrap(None if model.outputs_are_states else model.h, False), outputs=model.outputs,
@@ -112,8 +132,8 @@ def _lagged(x, dt: float, tau: float):
 def states_along(model: GreyBoxModel, y, dt: float):
     """The full state of `model` along a trajectory `y` `(n, outputs)` of its outputs, for a
     model whose first states are its outputs (the lon/lat models and their augmentations):
-    `y`, then for a `lag_states` model its lag states, the lagged states through the lag
-    `augment` prepares the lag inputs with (`_catalogue.lagging_part` plus the state).
+    `y`, then for a `lag_states` model its lag states, each quasi-steady load through its
+    stage's lag (the filter `augment` prepares the lag inputs with).
 
     **Returns:** `(n, states)`.
     """
@@ -123,5 +143,6 @@ def states_along(model: GreyBoxModel, y, dt: float):
     if len(model.states) == n:
         return y
     f = model.f
-    z = jnp.stack([_lagged(y[:, s], dt, f.tau) for s in f.src], axis=1)
-    return jnp.concatenate([y, z], axis=1)
+    qs = y @ jnp.asarray(np.asarray(f.weights))[:, :n].T
+    z = [_lagged(qs[:, j], dt, tau) for j in range(len(f.slots)) for tau in f.taus]
+    return jnp.concatenate([y, jnp.stack(z, axis=1)], axis=1)

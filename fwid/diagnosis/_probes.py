@@ -1,6 +1,6 @@
 """Probes: deterministic structure that no catalogue entry describes.
 
-A catalogue effect (`_catalogue.py`) is named only when it explains the gap better than any of
+A catalogue effect (`_catalogue/`) is named only when it explains the gap better than any of
 these. Each probe is a generic, low-order family of regressors of the cycle-averaged loads,
 fitted and tested exactly like a catalogue effect (the cross-fit of `_significance.py`, in the
 same forward selection). When a probe is the first to enter, the residual is predictable from
@@ -27,14 +27,14 @@ import math
 import numpy as np
 
 from ._attribution import Engine, acts_on
-from ._catalogue import Effect, _slow, axis_of
+from ._catalogue import Effect, axis_of, slow_of
 
 #: The attitude angle of each axis.
 ATTITUDE = {"lon": "theta", "lat": "phi"}
 
 
 def _attitude(s, load, variant, h, dh):
-    return _slow(s, ATTITUDE[axis_of(load)])[:, None]
+    return slow_of(s, ATTITUDE[axis_of(load)])[:, None]
 
 
 def elapsed(t: np.ndarray) -> np.ndarray:

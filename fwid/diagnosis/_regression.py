@@ -32,15 +32,12 @@ def local_design(phase: np.ndarray, harmonics: int = HARMONICS) -> np.ndarray:
 
 def harmonic_series(phase: np.ndarray, coef: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The flapping series of Eq. (12) with local coefficients `coef` (as `local_design`,
-    constant first), and its derivative with respect to the phase."""
-    h = np.zeros_like(phase)
-    dh = np.zeros_like(phase)
-    for k in range(1, (len(coef) - 1) // 2 + 1):
-        a, b = coef[2 * k - 1], coef[2 * k]
-        s, c = np.sin(k * phase), np.cos(k * phase)
-        h += a * s + b * c
-        dh += k * (a * c - b * s)
-    return h, dh
+    constant first), harmonic by harmonic, and each harmonic's derivative with respect to the
+    phase: two arrays `(n, harmonics)` (their row sums are the series and its derivative)."""
+    k = np.arange(1, (len(coef) - 1) // 2 + 1)
+    a, b = coef[1::2][: len(k)], coef[2::2][: len(k)]
+    s, c = np.sin(phase[:, None] * k), np.cos(phase[:, None] * k)
+    return a * s + b * c, k * (a * c - b * s)
 
 
 class Projector:

@@ -8,16 +8,9 @@ pass, the one with the largest held-out gain is added. Selection stops when none
 an effect is in, a correlated candidate that only echoed it loses its gain, so it is not named
 twice; a second, different effect keeps its own and is added next.
 
-An entry built on states' rates (`Effect.rates`: `unsteady-aero`) is the last resort: the
-rate of one state carries the load it is reconstructed from (`w' = Z / m + ...`), so such an
-entry also "explains" any effect on the other loads of the axis. It gives way to any other
-passing catalogue entry that achieves `1 / RATES_MARGIN` of its held-out gain (a real effect
-on the loads seen through the other loads' rates is explained less well by the rates than
-directly), otherwise it competes with the rest on its gain; and it may enter only as the
-first effect: once another effect is in, it picks up that effect's leftover misfit on the
-other loads and would name a second effect that is not there. The confidence set
-(`_confidence.py`) does not use the margin: it holds the rates' entry alone, beside the other
-explanations the held-out blocks cannot reject, which is what the user is told.
+Every family's size is chosen inside the fitting flights (`Effect.sized`), so the round
+compares the candidates by held-out gain alone: none is preferred, held back or given a
+higher bar for its kind.
 """
 
 from __future__ import annotations
@@ -38,25 +31,6 @@ ALPHA = 0.05
 MIN_GAIN = 0.02
 #: Most effects selected.
 MAX_EFFECTS = 3
-#: How many times the gain of another passing catalogue entry an entry built on states'
-#: rates must have to be preferred to it (chosen on the development half of
-#: `benchmarks/diagnosis_power.py`).
-RATES_MARGIN = 1.2
-#: Smallest typical held-out gain of an entry built on states' rates (3 %): the rates of the
-#: other states carry a little of the load's own noise through the kinematic terms
-#: (`Z = m (w' - q u0 + ..)`), so such an entry needs more than `MIN_GAIN`.
-RATES_MIN_GAIN = 0.03
-
-
-def _admissible(ok: list[Effect], ev: dict) -> list[Effect]:
-    """The passing candidates the round may choose from: an entry built on states' rates
-    drops out when another passing catalogue entry (not a probe) has at least
-    `1 / RATES_MARGIN` of its gain (module docstring)."""
-    rival = max((ev[e.name].mean for e in ok if not e.rates and not e.probe), default=None)
-    return [e for e in ok
-            if not (e.rates and rival is not None and RATES_MARGIN * rival >= ev[e.name].mean)]
-
-
 @dataclasses.dataclass
 class Selection:
     """`chosen`: the effects in the order added with the evidence that admitted each;
@@ -85,9 +59,9 @@ class Selection:
         return {k: lv for lv, evs, _ in self.rounds for k in evs}
 
 
-def passes(e: Effect, ev: Evidence, level: float, min_gain: float) -> bool:
-    """Does candidate `e` with evidence `ev` pass a round at `level`?"""
-    return ev.p < level and ev.gain >= (max(min_gain, RATES_MIN_GAIN) if e.rates else min_gain)
+def passes(ev: Evidence, level: float, min_gain: float) -> bool:
+    """Does a candidate with evidence `ev` pass a round at `level`?"""
+    return ev.p < level and ev.gain >= min_gain
 
 
 def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effect],
@@ -101,17 +75,13 @@ def forward_select(engine: Engine, halves: list[Half], catalogue: Sequence[Effec
     remaining = list(catalogue)
     chosen, rounds = [], []
     while remaining and len(chosen) < max_effects:
-        if chosen:
-            remaining = [e for e in remaining if not e.rates]
-            if not remaining:
-                break
         lv = alpha / len(remaining)
         ev = {e.name: evidence(engine, halves, models, e) for e in remaining}
-        ok = [e for e in remaining if passes(e, ev[e.name], lv, min_gain)]
+        ok = [e for e in remaining if passes(ev[e.name], lv, min_gain)]
         if not ok:
             rounds.append((lv, ev, None))
             break
-        best = max(_admissible(ok, ev), key=lambda e: ev[e.name].mean)
+        best = max(ok, key=lambda e: ev[e.name].mean)
         rounds.append((lv, ev, best.name))
         chosen.append((best, ev[best.name]))
         if on_first is not None and len(chosen) == 1:

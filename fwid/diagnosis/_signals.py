@@ -116,6 +116,15 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
     )
 
 
+def cycle_averaged(flight: Flight, names: Sequence[str], cutoff: float = 5.0
+                   ) -> dict[str, np.ndarray]:
+    """The whole flight's cycle-averaged perturbations (below the split, less the trim) of
+    those of `names` it has, as `Signals.slow` holds them without the edges dropped."""
+    have = [c for c in names if c in flight]
+    parts = decompose({c: flight[c] for c in have}, flight.dt, split_cutoff=cutoff)
+    return {c: np.asarray(parts.averaged[c] - flight.trim_value(c)) for c in have}
+
+
 def check_axis(flights: Sequence[Flight], axis: str, role: str) -> None:
     """Every flight has what the diagnosis of `axis` needs; else an `InputError` naming the
     flight and the missing columns (`Flight.require`)."""

@@ -17,7 +17,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
-from .._errors import FitDivergedError
+from .._errors import ExcitationError, FitDivergedError
 from ..data import Flight
 from ..estimate import least_squares_start, quiet_fits
 from ..identification import Identification, get_model, identify
@@ -108,7 +108,7 @@ def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
             after = identify([prepare(f) for f in train], model.with_params(fitted),
                              validate=[prepare(f) for f in test], joint=True, cutoff=cutoff,
                              start="model")
-    except (FitDivergedError, np.linalg.LinAlgError) as exc:
+    except (FitDivergedError, ExcitationError, np.linalg.LinAlgError) as exc:
         return None, (f"the model with {' + '.join(in_eom)} in the EOM could not be fitted "
                       f"and simulated ({exc}): the simulated gap is not measured"), []
     return after, None, [m for f in after.fits for m in f.warnings]

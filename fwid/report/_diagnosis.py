@@ -120,11 +120,18 @@ def diagnosis_summary(d: Diagnosis) -> str:
     elif d.verdict == "random-disturbance":
         dist = d.disturbance
         size = ", ".join(f"{ld} {v:.3g}" for ld, v in dist["rms"].items())
-        u = d.unexplained
-        why = (f"the {u['probe']} probe was selected (p = {u['p']:.2g}) but leaves it red "
-               f"({u['redness_after']:.1f}): it tracks what the disturbance did; no catalogue "
-               "effect explains it" if u else
-               "no catalogue effect or probe explains the held-out error")
+        u, red = d.unexplained, dist.get("leaves_red")
+        if red:
+            names = " + ".join(red["effects"])
+            why = (f"{names} predicts part of the held-out error but leaves it about as red "
+                   f"({red['redness_after']:.1f}, from {dist['redness']:.1f}): it tracks what "
+                   "the disturbance did to the states, so it is not named")
+        elif u:
+            why = (f"the {u['probe']} probe was selected (p = {u['p']:.2g}) but leaves it "
+                   f"about as red ({u['redness_after']:.1f}, from {dist['redness']:.1f}): it "
+                   "tracks what the disturbance did; no catalogue effect explains it")
+        else:
+            why = "no catalogue effect or probe explains the held-out error"
         lines.append(f"  VERDICT: random-disturbance: {why}; the error is red (low/high-"
                      f"frequency PSD ratio {dist['redness']:.1f} >= {dist['red_min']:g}), as "
                      f"gusts or process noise make it; cycle-averaged residual RMS {size}; a "
@@ -161,16 +168,6 @@ def diagnosis_summary(d: Diagnosis) -> str:
     cs = confidence_set_line(d)
     if cs:
         lines.append(cs)
-    px = (d.disturbance or {}).get("proxy")
-    if px:
-        why = (f"left the residual red ({px['redness_after']:.1f})"
-               if px["redness_after"] >= d.disturbance["red_min"] else
-               f"took its shortest lag ({px['variant']}), a state's rate, on a red residual")
-        what = ("tracked the disturbance through the states' rates" if not d.effects else
-                "may only stand in, through the states' rates, for a disturbance or for what "
-                f"{d.effects[0]['effect']} explains directly")
-        lines.append(f"  ({px['effect']} was significant, p = {px['p']:.2g}, but {why}: it "
-                     f"{what}, so it is not named; the selection was run again without it)")
     for e in d.effects if d.verdict == "unexplained" else d.effects[1:]:
         without = [x for x in d.confidence_set if e["effect"] not in x["explanation"]]
         lines.append(f"  and also: {e['effect']}"

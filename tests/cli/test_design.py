@@ -87,6 +87,17 @@ def test_the_close_pair_and_its_variants_are_read_back():
     diag["confidence_set"] = [{"explanation": ["actuator-dynamics", "attitude"]},
                               {"explanation": ["actuator-dynamics", "nonlinear-aero"]},
                               {"explanation": ["nonlinear-aero"]}]
-    diag["candidates"][0]["variant"] = "terms ww, u|u|"
+    diag["candidates"][0]["variant"] = "smooth in w (2 degrees of freedom each)"
     assert close_pair(diag) == [("actuator-dynamics", ("delay", 0.02)),
-                                ("nonlinear-aero", (2, 1))]
+                                ("nonlinear-aero", None)]  # its words alone cannot form it
+    # with its member, every number of it is read back
+    from fwid.diagnosis._catalogue import member_json
+    from fwid.diagnosis._catalogue._smooth import smooth_basis
+    from fwid.diagnosis._catalogue.nonlinear_aero import Terms
+
+    terms = Terms((1,), 2, bases={"w": smooth_basis(np.linspace(-1.0, 1.0, 400))})
+    diag["candidates"][0]["member"] = json.loads(json.dumps(member_json(terms)))
+    (_, got), (name, back) = close_pair(diag)
+    assert name == "nonlinear-aero" and back == terms
+    x = np.linspace(-2.0, 2.0, 50)
+    np.testing.assert_array_equal(back.bases["w"](x), terms.bases["w"](x))

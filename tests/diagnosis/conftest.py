@@ -8,17 +8,19 @@ from fwid.synth import write_flights
 
 @pytest.fixture(scope="session")
 def effect_flights(tmp_path_factory):
-    """`effect_flights(effect, axis="lon", strength=1.0, seed=0, n_train=8, n_test=8)` ->
+    """`effect_flights(effect, axis="lon", strength=1.0, seed=0, n_train=8, n_test=8,
+    form=None)` ->
     `(train_dir, test_dir)`; sidecars are deleted (the diagnosis sees CSV columns only)."""
     cache = {}
 
-    def make(effect, axis="lon", strength=1.0, seed=0, n_train=8, n_test=8):
-        key = (effect, axis, strength, seed, n_train, n_test)
+    def make(effect, axis="lon", strength=1.0, seed=0, n_train=8, n_test=8, form=None):
+        key = (effect, axis, strength, seed, n_train, n_test, form)
         if key not in cache:
             root = tmp_path_factory.mktemp(f"{effect}-{axis}")
             for part, n, s in (("train", n_train, 100 * seed), ("test", n_test, 100 * seed + 50)):
                 for p in write_flights(root / part, n, axis, seed=s, effect=effect,
-                                       strength=strength):
+                                       strength=strength,
+                                       **({"form": form} if form else {})):
                     p.with_suffix(".json").unlink()
             cache[key] = (root / "train", root / "test")
         return cache[key]

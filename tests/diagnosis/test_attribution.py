@@ -7,6 +7,7 @@ import numpy as np
 
 from fwid.diagnosis._attribution import Engine, OnLoads, acting, simplest_best, units
 from fwid.diagnosis._catalogue import actuator_filter, get_effect
+from fwid.diagnosis._catalogue.nonlinear_aero import columns_of
 from fwid.diagnosis._signals import Signals
 
 
@@ -39,9 +40,9 @@ def _engine(rng, count=6, **kw):
 def test_leave_one_flight_out_error_matches_refitting_without_each_flight():
     rng = np.random.default_rng(3)
     eng = _engine(rng)
-    nl = get_effect("nonlinear-aero")
-    model = ((nl, None),)
     idx = tuple(range(6))
+    nl = get_effect("nonlinear-aero").bound(eng, idx)  # its splines over these flights
+    model = ((nl, nl.variants[0]),)
     for ch in (("M", "averaged"), ("Z", "averaged")):
         ref = 0.0
         for k in idx:
@@ -60,22 +61,24 @@ def test_an_effect_on_one_load_acts_on_that_load_only():
     eng = _engine(rng)
     idx = tuple(range(6))
     sigma2 = eng.mean_square(idx)
-    v = eng.choose(idx, (), get_effect("nonlinear-aero"), sigma2)
+    nl = get_effect("nonlinear-aero").bound(eng, idx)
+    v = eng.choose(idx, (), nl, sigma2)
     assert isinstance(v, OnLoads) and v.loads == ("M",)
     # where it does not act, the design is the baseline's
-    nl = get_effect("nonlinear-aero")
     assert acting(((nl, v),), ("X", "averaged")) == ()
     assert eng.design(0, ("X", "averaged"), ((nl, v),)).shape[1] == 4
-    # the family's size (`Effect.sized`): the subset of its nine columns chosen by
-    # leave-one-flight-out error
-    size = 9 if v.variant is None else len(v.variant)
+    # the family's size (`Effect.sized`): the member chosen by leave-one-flight-out error,
+    # `w`'s smooth odd shape (`M` has `w |w|`), not every variable's finest shapes
+    assert v.variant.which == (1,) and v.variant.df >= 2, v.variant
+    size = columns_of(eng.units[0].signals.slow, "lon", v.variant).shape[1]
     assert eng.design(0, ("M", "averaged"), ((nl, v),)).shape[1] == 4 + size
     # with no such term anywhere, it seldom acts anywhere: its columns only fit noise, which
     # raises the error on the flight left out (30 seeds x 3 loads: 1 chosen when written)
     chosen = 0
     for seed in range(30):
         e0 = _engine(np.random.default_rng(100 + seed), quadratic_on_m=0.0)
-        chosen += len(e0.choose(idx, (), nl, e0.mean_square(idx)).loads)
+        chosen += len(e0.choose(idx, (), get_effect("nonlinear-aero").bound(e0, idx),
+                                e0.mean_square(idx)).loads)
     assert chosen <= 4
 
 
@@ -89,7 +92,7 @@ def test_an_effect_of_the_quiet_axis_is_kept_off_its_loads():
     eng = Engine(units(flights), ("X", "Z", "M"), own=("X", "Z"))
     idx = tuple(range(6))
     sigma2 = eng.mean_square(idx)
-    nl = get_effect("nonlinear-aero")
+    nl = get_effect("nonlinear-aero").bound(eng, idx)
     assert eng.allowed(nl) == ("X", "Z")
     assert "M" not in eng.choose(idx, (), nl, sigma2).loads
     assert eng.choose(idx, (), get_effect("actuator-dynamics"), sigma2).loads == ("X", "Z")

@@ -8,10 +8,11 @@ import fwid
 from fwid.design._signals import Grid, input_3211
 from fwid.diagnosis._augment import augment
 from fwid.diagnosis._catalogue import lagging_part
+from fwid.diagnosis._catalogue.unsteady_aero import Lagging, unsteady_states
 from fwid.diagnosis._lag_states import lag_states
 
 TAU = 0.1
-LAG = {"Mw_lag": 0.003, "Zw_lag": -0.05, "Xu_lag": -0.02, "Mq_lag": -0.001}
+LAG = {"X_lag": 0.8, "Z_lag": 0.8, "M_lag": 0.8}
 
 
 @pytest.fixture(scope="module")
@@ -22,8 +23,19 @@ def setup():
     consts = {"mass": vehicle["mass"], "Iy": vehicle["Iy"], "g": vehicle["g"],
               "u0": trim["u0"], "w0": trim["w0"], "theta0": trim["theta0"]}
     R = np.diag([NOISE[k] ** 2 for k in ("q", "u", "w", "theta")])
-    model, _, _ = augment("lon", [("unsteady-aero", TAU)])
-    return model.with_params(LAG), model, consts, R
+    base = fwid.longitudinal()
+    member = Lagging("lag", TAU, {ld: {x: float(base.params[f"{ld}{x}"])
+                                       for x in unsteady_states(ld)} for ld in "XZM"})
+    model, _, _ = augment("lon", [("unsteady-aero", member)])
+    return model.with_params(LAG), model, consts, R, member
+
+
+def _lagp(model, member, y, dt):
+    """`lagging_part` (the diagnosis's filter, numpy) of each load's quasi-steady load along
+    the outputs `y`."""
+    return np.stack([lagging_part(sum(g * y[:, model.states.index(x)]
+                                      for x, g in member.derivatives[ld].items()), dt, TAU)
+                     for ld in "XZM"], axis=1)
 
 
 def _simulate(model, t, u, consts):
@@ -34,29 +46,30 @@ def _simulate(model, t, u, consts):
 
 
 def test_the_lag_states_equal_the_lag_inputs_fed_the_models_own_states(setup):
-    model, _, consts, _ = setup
-    inner = lag_states(model, "lon", TAU)
-    assert inner.states == ("q", "u", "w", "theta", "u_lagged", "w_lagged", "q_lagged")
+    model, _, consts, _, member = setup
+    inner = lag_states(model, "lon", member)
+    assert inner.states == ("q", "u", "w", "theta", "X_lag1", "Z_lag1", "M_lag1")
     assert inner.inputs == ("de",) and inner.outputs == model.outputs
     grid = Grid(4.0, 1.0, 100.0)
     t, de = grid.t, input_3211(grid, 0.12)
     xs, ys = _simulate(inner, t, de[:, None], consts)
-    # the input-lag model, fed lag(x) - x of the states the lag-state model simulated
-    # (`lagging_part`, the filter the diagnosis prepares the inputs with), simulates them back
-    lagp = np.stack([lagging_part(ys[:, model.states.index(s)], t[1] - t[0], TAU)
-                     for s in ("u", "w", "q")], axis=1)
+    # the input-lag model, fed the lagging quasi-steady loads of the states the lag-state
+    # model simulated (the filter the diagnosis prepares the inputs with), simulates them back
+    lagp = _lagp(model, member, ys, t[1] - t[0])
     _, y_in = _simulate(model, t, np.column_stack([de, lagp]), consts)
     scale = np.max(np.abs(ys), axis=0)
     assert np.all(np.max(np.abs(ys - y_in), axis=0) < 2e-3 * scale)
-    # the lag states are the lagged states (z = x + lag(x) - x)
-    np.testing.assert_allclose(xs[:, 4:], xs[:, [1, 2, 0]] + lagp, atol=1e-2 * scale[1])
+    # the lag states are the lagged quasi-steady loads (z = qs + lag(qs) - qs)
+    qs = np.stack([sum(g * xs[:, model.states.index(x)] for x, g in member.derivatives[ld].items())
+                   for ld in "XZM"], axis=1)
+    np.testing.assert_allclose(xs[:, 4:], qs + lagp, atol=1e-2 * np.max(np.abs(qs)))
     # ... and the terms matter: held at zero, the prediction is another one
     _, y_held = _simulate(model, t, np.column_stack([de, 0 * lagp]), consts)
     assert np.all(np.max(np.abs(ys - y_held), axis=0) > 0.2 * scale)
 
 
 def test_a_discriminating_design_drives_the_lag_terms(setup):
-    model, plain, consts, R = setup
+    model, plain, consts, R, member = setup
     zero = {k: 0.0 for k in LAG}
     # two models that differ only in the lag terms: with the lags held at zero (the inputs of
     # the augmented model) no input tells them apart
@@ -65,7 +78,7 @@ def test_a_discriminating_design_drives_the_lag_terms(setup):
     held = np.column_stack([de, np.zeros((t.size, 3))])
     np.testing.assert_array_equal(_simulate(model, t, held, consts)[1],
                                   _simulate(plain.with_params(zero), t, held, consts)[1])
-    a, b = lag_states(plain.with_params(zero), "lon", TAU), lag_states(model, "lon", TAU)
+    a, b = lag_states(plain.with_params(zero), "lon", member), lag_states(model, "lon", member)
     d = fwid.design_discriminating(a, b, consts=consts, R=R, amplitude=0.1, duration=3.0,
                                    quiet=1.0, rate=20.0, attitude="theta", restarts=2,
                                    iterations=30, switch_rate=5.0)
@@ -84,8 +97,8 @@ def test_the_loads_along_a_trajectory_are_the_input_lag_models_loads(setup):
     from fwid.diagnosis._lag_states import states_along
     from fwid.simulation._simulate import simulate_forces
 
-    model, _, consts, _ = setup
-    inner = lag_states(model, "lon", TAU)
+    model, _, consts, _, member = setup
+    inner = lag_states(model, "lon", member)
     t = np.linspace(0.0, 3.0, 151)
     de = 0.1 * np.sign(np.sin(2 * np.pi * 0.7 * t))
     y = _simulate(inner, t, de[:, None], consts)[1] + 0.01 * np.sin(7 * t)[:, None]
@@ -94,8 +107,7 @@ def test_the_loads_along_a_trajectory_are_the_input_lag_models_loads(setup):
     z4 = np.zeros((t.size, 4))
     got = np.asarray(simulate_forces(inner, x, fwid.Experiment(t, de[:, None], z4,
                                                                x0=np.zeros(7), consts=consts)))
-    lagp = np.stack([lagging_part(y[:, model.states.index(s)], t[1] - t[0], TAU)
-                     for s in ("u", "w", "q")], axis=1)
+    lagp = _lagp(model, member, y, t[1] - t[0])
 
     def loads(lag_inputs):
         exp = fwid.Experiment(t, np.column_stack([de, lag_inputs]), z4, x0=np.zeros(4),

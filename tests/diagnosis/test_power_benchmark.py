@@ -162,29 +162,11 @@ def test_pairs_are_also_scored_against_issue_12s_catalogue():
     assert "all pairs so scored: 4/6." in text
 
 
-def test_an_effect_hidden_behind_a_proxy_of_a_disturbance_is_named(monkeypatch):
-    """A strong thrust change with the flapping frequency (development case): `unsteady-aero`
-    enters first as a proxy of a disturbance (it leaves the residual red, or takes its
-    shortest lag on a red one); set aside, the selection run again names the effect, and the
-    summary does not say the entry tracked a disturbance."""
-    import fwid
-    from fwid.report import diagnosis_summary
-
-    case = next(c for c in dp.cases("dev") if c["kind"] == "single"
-                and c["effect"] == "flap-frequency" and c["form"] == "thrust"
-                and c["strength"] == 2.0 and c["n"] == 6 and c["seed"] == 2)
-    seen, real = [], fwid.diagnose
-    monkeypatch.setattr(fwid, "diagnose", lambda *a, **kw: seen.append(real(*a, **kw)) or seen[-1])
-    rec = dp.run_case(dict(case), peer=False)
-    text = diagnosis_summary(seen[0])
-    assert "may only stand in, through the states' rates, for a disturbance or for what " \
-        "flap-frequency explains directly" in text and "tracked the disturbance" not in text
-    assert rec["disturbance"]["proxy"]["effect"] == "unsteady-aero", rec.get("disturbance")
-    assert rec["verdict"] == "flap-frequency" and rec["effects"][0] == "flap-frequency"
-    # a further effect is one the set cannot do without, or the summary says it may not be there
-    kept = [x["explanation"] for x in rec["confidence_set"]]
-    for e in rec["effects"][1:]:
-        if any(e not in x for x in kept):
-            assert "without it: these flights cannot tell whether it is there" in text
-    assert all("unsteady-aero" not in r["candidates"] for r in rec["rounds"])
-    assert all("unsteady-aero" not in x["explanation"] for x in rec["confidence_set"])
+def test_subset_groups_take_a_case_in_any_group():
+    cases = [{"kind": "single", "strength": 1.0, "effect": "a"},
+             {"kind": "single", "strength": 2.0, "effect": "a"},
+             {"kind": "pair", "strength": 1.0, "effect": "a+b"},
+             {"kind": "clean", "strength": 0.0, "effect": "none"}]
+    got = dp.select(cases, ["kind=single", "strength=1.0", "|", "kind=clean"], None)
+    assert got == [cases[0], cases[3]]
+    assert dp.select(cases, ["effect=b"], None) == [cases[2]]

@@ -1,31 +1,34 @@
-"""The choice of a selection round: an entry built on states' rates gives way to a direct
-catalogue explanation, and competes with the probes on its gain otherwise."""
+"""The choice of a selection round: the largest held-out gain that passes, whatever the
+family (every family's size is chosen inside the fitting flights, so none is held back)."""
 
 import types
 
 from fwid.diagnosis._catalogue import CATALOGUE, get_effect
 from fwid.diagnosis._probes import PROBES
 from fwid.diagnosis import _selection
-from fwid.diagnosis._selection import RATES_MARGIN, _admissible
 
 
-def _ev(**means):
-    return {k.replace("_", "-"): types.SimpleNamespace(mean=v) for k, v in means.items()}
-
-
-def test_only_unsteady_aero_is_built_on_rates_and_probes_are_marked():
-    assert [e.name for e in CATALOGUE if e.rates] == ["unsteady-aero"]
+def test_probes_are_marked_and_no_entry_has_a_rule_of_its_own():
     assert all(p.probe for p in PROBES) and not any(e.probe for e in CATALOGUE)
+    assert not any(hasattr(_selection, k) for k in ("RATES_MARGIN", "RATES_MIN_GAIN"))
 
 
-def test_rates_entry_gives_way_to_a_direct_entry_with_half_its_gain():
-    un, act, att = get_effect("unsteady-aero"), get_effect("actuator-dynamics"), PROBES[0]
-    ev = _ev(unsteady_aero=0.44, actuator_dynamics=0.44 / RATES_MARGIN, attitude=0.2)
-    assert _admissible([un, act, att], ev) == [act, att]
-    ev = _ev(unsteady_aero=0.44, actuator_dynamics=0.9 * 0.44 / RATES_MARGIN, attitude=0.2)
-    assert _admissible([un, act, att], ev) == [un, act, att]
-    # probes are no reason to drop it: it then competes with them on its gain
-    assert _admissible([un, att], _ev(unsteady_aero=0.1, attitude=0.3)) == [un, att]
+def test_unsteady_aero_is_chosen_on_its_gain_and_may_follow_another_effect(monkeypatch):
+    """No rates-first rule: `unsteady-aero` enters second when it passes after another."""
+    import math
+
+    table = {(): {"unsteady-aero": (1e-6, 0.10), "actuator-dynamics": (1e-6, 0.20)},
+             ("actuator-dynamics",): {"unsteady-aero": (1e-5, 0.05)},
+             ("actuator-dynamics", "unsteady-aero"): {}}
+
+    def fake(engine, halves, models, effect):
+        p, g = table[tuple(e.name for e, _ in models[0])][effect.name]
+        return types.SimpleNamespace(p=p, gain=g, mean=-math.log(1 - g), variants=(None,))
+
+    monkeypatch.setattr(_selection, "evidence", fake)
+    sel = _selection.forward_select(None, [None], [get_effect("unsteady-aero"),
+                                                   get_effect("actuator-dynamics")])
+    assert [e.name for e, _ in sel.chosen] == ["actuator-dynamics", "unsteady-aero"]
 
 
 def test_each_round_adds_the_largest_gain_that_passes(monkeypatch):

@@ -63,14 +63,22 @@ def test_an_actuator_lag_in_the_eom_closes_the_simulated_gap(effect_flights, tmp
 
 
 def test_no_shrink_from_an_effect_that_is_not_there(effect_flights):
-    """Clean flights with the quadratic terms forced into the model anyway (27 more free
-    derivatives): the simulated gap on the test flights barely moves (no over-fitting on the
-    training flights)."""
+    """Clean flights with smooth terms forced into the model anyway (each state's two
+    smoothest spline components and their products: 27 more free derivatives): the simulated
+    gap on the test flights shows no gain (no over-fitting on the training flights passes for
+    an effect) and moves little (6 % worse when written, with 4 training flights)."""
+    from fwid.diagnosis._catalogue._smooth import smooth_basis
+    from fwid.diagnosis._catalogue.nonlinear_aero import Terms
+    from fwid.diagnosis._signals import cycle_averaged
+
     train, test = (fwid.load_flights(p) for p in effect_flights(
         "none", seed=6, n_train=4, n_test=4))
-    gap = simulation_gap(train, test, "lon", [("nonlinear-aero", None)])
+    slow = [cycle_averaged(f, ("u", "w", "q")) for f in train]
+    bases = {x: smooth_basis(np.concatenate([s[x] for s in slow])) for x in ("u", "w", "q")}
+    gap = simulation_gap(train, test, "lon", [("nonlinear-aero", Terms((0, 1, 2), 2, True,
+                                                                       bases))])
     assert gap.augmented is not None and len(gap.augmented.model.free) == 16 + 27
-    assert abs(gap.summary["shrink_pct"]) < 5.0, gap.summary
+    assert -10.0 < gap.summary["shrink_pct"] < 2.0, gap.summary
 
 
 @pytest.mark.parametrize("axis", ["lon", "lat"])
@@ -78,7 +86,13 @@ def test_augmented_eom_adds_the_extra_loads_as_the_aerodynamic_ones(axis):
     """The augmented state equation equals the base one plus the extra loads mapped through
     the same EOM: checked against the base model with the extra load folded into a derivative
     (an independent route: a state derivative times the state)."""
-    model, _, left = augment(axis, [("nonlinear-aero", None), ("lon-lat-coupling", None),
+    from fwid.diagnosis._catalogue._smooth import smooth_basis
+    from fwid.diagnosis._catalogue.nonlinear_aero import Terms
+
+    s0 = {"lon": "q", "lat": "p"}[axis]  # the first state: its smooth bend g adds g(s0)
+    basis = smooth_basis(np.linspace(-1.0, 1.0, 500) ** 3)
+    member = Terms(({"lon": 2, "lat": 1}[axis],), 1, bases={s0: basis})
+    model, _, left = augment(axis, [("nonlinear-aero", member), ("lon-lat-coupling", None),
                                     ("flap-coupling", None)])
     assert left == ["flap-coupling"]
     base = fwid.longitudinal() if axis == "lon" else fwid.lateral()
@@ -87,36 +101,44 @@ def test_augmented_eom_adds_the_extra_loads_as_the_aerodynamic_ones(axis):
     c = {k: jnp.asarray(c[k]) for k in model.constants}
     x = jnp.array([0.1, 0.2, -0.3, 0.05])
     u = jnp.array([0.02] + [0.0] * (len(model.inputs) - 1))
-    s0 = {"lon": "q", "lat": "p"}[axis]  # the first state: its square adds s0 * s0
     load = {"lon": "M", "lat": "L"}[axis]
     p = {k: jnp.asarray(v) for k, v in model.params.items()}
-    p[f"{load}_{s0}{s0}"] = jnp.asarray(0.7)
+    p[f"{load}_{s0}1"] = jnp.asarray(0.7)
     pb = {k: jnp.asarray(v) for k, v in base.params.items()}
-    pb[f"{load}{s0}"] = pb[f"{load}{s0}"] + 0.7 * x[0]  # the same load, as a derivative
+    g = float(basis(np.array([0.1]))[0, 0])  # scipy's piecewise cubic, numpy
+    pb[f"{load}{s0}"] = pb[f"{load}{s0}"] + 0.7 * g / 0.1  # the same load, as a derivative
     np.testing.assert_allclose(model.f(x, u, p, c), base.f(x, u[:1], pb, c), rtol=1e-12)
     np.testing.assert_allclose(model.forces(x, u, p, c), base.forces(x, u[:1], pb, c),
                                rtol=1e-12)
 
 
 def test_new_catalogue_entries_in_the_eom_read_their_prepared_columns(effect_flights):
-    """`unsteady-aero`, `flap-frequency` and `time-offset` (issue 16) enter the EOM as extra
-    inputs that `prepare` computes from the flight: the lagging part of each state (a first-
-    order lag computed independently here), the frequency's deviation from its median and
-    its square, and the cycle-averaged control (what the diagnosis fitted on the loads)
-    shifted earlier by the lead."""
+    """`unsteady-aero`, `flap-frequency` and `time-offset` enter the EOM as extra inputs that
+    `prepare` computes from the flight: per load, the lagging part of its quasi-steady load
+    (the diagnosed derivatives on the cycle-averaged states, through a first-order lag
+    computed independently here), acting on that load alone; the frequency's deviation
+    from its median and its square; and the cycle-averaged control (what the diagnosis
+    fitted on the loads) shifted earlier by the lead."""
     from scipy.signal import lfilter, lfilter_zi
 
-    model, prepare, left = augment("lon", [("time-offset", 0.03), ("unsteady-aero", 0.05),
+    from fwid.diagnosis._catalogue.unsteady_aero import Lagging
+
+    member = Lagging("lag", 0.05, {"X": {"w": 0.2, "q": 0.1}, "Z": {"u": -0.3, "q": 0.4},
+                                   "M": {"u": 0.01, "w": -0.05}})
+    model, prepare, left = augment("lon", [("time-offset", 0.03), ("unsteady-aero", member),
                                            ("flap-frequency", 0.0)])
     assert left == []
-    assert model.inputs == ("de_eff", "u_lag", "w_lag", "q_lag", "f_dev", "f_dev2")
-    assert {"Mw_lag", "Zq_lag", "Xf_dev", "Mf_dev2"} <= set(model.free)
+    assert model.inputs == ("de_eff", "X_lag", "Z_lag", "M_lag", "f_dev", "f_dev2")
+    assert {"X_lag", "Z_lag", "M_lag", "Xf_dev", "Mf_dev2"} <= set(model.free)
+    assert not {"MX_lag", "XM_lag", "ZM_lag"} & set(model.free)  # each load its own
     fl = prepare(fwid.load_flights(effect_flights("none", seed=0)[0])[0])
-    w = np.asarray(fl["w"])
+    slow = {x: np.asarray(decompose({x: np.asarray(fl[x]) - float(fl.trim_value(x))},
+                                    fl.dt).averaged[x]) for x in ("u", "w")}
+    qs = 0.01 * slow["u"] - 0.05 * slow["w"]
     a = np.exp(-fl.dt / 0.05)
     b = (0.5 * (1 - a), 0.5 * (1 - a))
-    ref, _ = lfilter(b, (1, -a), w, zi=lfilter_zi(b, (1, -a)) * w[0])
-    np.testing.assert_allclose(np.asarray(fl["w_lag"]), ref - w, atol=1e-12)
+    ref, _ = lfilter(b, (1, -a), qs, zi=lfilter_zi(b, (1, -a)) * qs[0])
+    np.testing.assert_allclose(np.asarray(fl["M_lag"]), ref - qs, atol=1e-12)
     f = np.asarray(fl["f"])
     np.testing.assert_allclose(np.asarray(fl["f_dev2"]), (f - np.median(f)) ** 2, atol=1e-12)
     de = np.asarray(fl["de"]) - float(fl.trim_value("de"))

@@ -64,10 +64,53 @@ def test_actuator_family_is_chosen_by_held_out_error_and_every_member_runs():
     e = get_effect("actuator-dynamics")
     assert e.sized and e.replaces_input and e.variants == ACTUATOR_FILTERS
     kinds = {v[0] for v in ACTUATOR_FILTERS}
-    assert kinds == {"lag", "delay", "lag-delay", "second-order", "rate-limit", "asymmetric"}
+    assert kinds == {"lag", "delay", "lag-delay", "second-order", "rate-limit", "asymmetric",
+                     "saturation", "dead-band", "backlash"}
     x = np.sin(2 * np.pi * 2 * T)
     for v in ACTUATOR_FILTERS:
         y = actuator_filter(x, DT, v)
         assert y.shape == x.shape and np.all(np.isfinite(y)), v
         assert filter_text(v)
-    assert sum(c.sized for c in CATALOGUE) == 2
+    assert {c.name for c in CATALOGUE if c.sized} == {
+        "nonlinear-aero", "actuator-dynamics", "unsteady-aero", "flap-coupling"}
+
+
+def test_hammerstein_and_wiener_saturations_differ_and_are_lags_below_the_limit():
+    """A saturation before the lag (Hammerstein) clips the input, after it (Wiener) the
+    output; below the limit both are the plain lag."""
+    x = _step(size=0.2)
+    lag = actuator_filter(x, DT, ("lag", 0.03))
+    before = actuator_filter(x, DT, ("saturation", 0.03, 0.1, "before"))
+    after = actuator_filter(x, DT, ("saturation", 0.03, 0.1, "after"))
+    np.testing.assert_allclose(before, lag / 2, atol=1e-12)  # the clipped step, lagged
+    np.testing.assert_allclose(after, np.minimum(lag, 0.1), atol=1e-12)
+    small = _step(size=0.05)
+    for order in ("before", "after"):
+        np.testing.assert_allclose(actuator_filter(small, DT, ("saturation", 0.03, 0.1, order)),
+                                   actuator_filter(small, DT, ("lag", 0.03)), atol=1e-12)
+
+
+def test_backlash_holds_until_the_input_crosses_its_play():
+    from fwid.diagnosis._catalogue._filters import backlash
+
+    x = 0.1 * np.sin(2 * np.pi * 2 * T)
+    y = backlash(x, 0.04)
+    assert np.max(np.abs(y - x)) <= 0.02 + 1e-15
+    turn = np.argmax(x)  # after the top, the output holds while the input falls by the play
+    end = turn + np.argmax(x[turn:] < x[turn] - 0.04)
+    assert np.all(np.diff(y[turn:end]) == 0.0) and y[end + 5] < y[turn]
+
+
+def test_the_nonlinear_members_are_sized_on_the_flights_largest_deflection():
+    from types import SimpleNamespace
+
+    e = get_effect("actuator-dynamics")
+    d = np.linspace(-0.2, 0.2, 1001)
+    sig = SimpleNamespace(slow={"de": d})
+    engine = SimpleNamespace(own=("X", "Z", "M"), units=[SimpleNamespace(signals=sig)])
+    bound = e.bound(engine, (0,))
+    sizes = {v[2] for v in bound.variants if v[0] == "saturation"}
+    scale = np.percentile(np.abs(d), 99.0)
+    assert sizes == {0.5 * scale, 0.75 * scale}
+    assert [v for v in bound.variants if v[0] not in ("saturation", "dead-band", "backlash")] \
+        == [v for v in e.variants if v[0] not in ("saturation", "dead-band", "backlash")]
