@@ -18,9 +18,8 @@ Each effect of the verdict becomes terms of the cycle-averaged model:
 - `lon-lat-coupling`: the other axis's measured states and control as extra inputs, with a
   derivative per own load (`Xv`, `Mdr`, `Lq`, ...: Eqs. 1-6 with the cross terms);
 - `nonlinear-aero`: the diagnosed member's smooth functions (the diagnosis's own spline
-  components, `_smooth.py`) of the *simulated* states and of the measured cycle-averaged
-  control, and their products, with a coefficient per own load (`M_w1`, `Z_de2`, `X_uw`,
-  ...);
+  components, `_smooth.py`) of the *simulated* states, and their products, with a
+  coefficient per own load (`M_w1`, `Z_q2`, `X_uw`, ...);
 - the probe `attitude`: a derivative of each own load on the attitude state (`Mtheta`);
 - the probe `drift`: the time since the flight's start (per 10 s) and its square as extra
   inputs, with a coefficient per own load (`Xtime`, `Xtime2`, ...), as the probe fits them.
@@ -47,7 +46,6 @@ from ._catalogue import actuator_filter, filter_text, frequency_deviation
 from ._catalogue.nonlinear_aero import Terms
 from ._catalogue.unsteady_aero import Lagging, lagging, quasi_steady, unsteady_states
 from ._probes import ATTITUDE, elapsed
-from ._catalogue._effect import variables
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, cycle_averaged, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
@@ -57,16 +55,14 @@ IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
 
 def _term(kind: str, idx: tuple, x, ue, basis):
     """One extra-load term: the extra input `ue[i]` (`"input"`), the state `x[i]`
-    (`"state"`), the product `x[i] x[j]` (`"cross"`) or `x[i] ue[j]` (`"state-input"`), or the
-    smooth component `j` of `basis` at `x[i]` (`"smooth"`), with `(i, j) = idx`."""
+    (`"state"`), the product `x[i] x[j]` (`"cross"`), or the smooth component `j` of `basis`
+    at `x[i]` (`"smooth"`), with `(i, j) = idx`."""
     if kind == "input":
         return ue[idx[0]]
     if kind == "state":
         return x[idx[0]]
     if kind == "cross":
         return x[idx[0]] * x[idx[1]]
-    if kind == "state-input":
-        return x[idx[0]] * ue[idx[1]]
     return basis(x[idx[0]], xp=jnp)[idx[1]]
 
 
@@ -125,12 +121,6 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
                 qs = " + ".join(f"{g:.4g} {x}" for x, g in variant.derivatives[ld].items())
                 out[f"{ld}_lag"] = (f"the quasi-steady {ld} ({qs}, cycle-averaged states "
                                     f"less trim) through a {variant.text()}, minus itself")
-        elif name == "nonlinear-aero" and isinstance(variant, Terms) and \
-                ctrl in variables_of(axis, variant):
-            out[f"{ctrl}_slow"] = f"cycle-averaged {ctrl} minus its trim"
-            for k in range(variant.df):
-                out[f"{ctrl}_s{k + 1}"] = (f"smooth component {k + 1} of {ctrl}_slow "
-                                          "(nonlinear-aero's spline basis)")
         elif name == "flap-frequency":
             lag = f" through a first-order lag of {float(variant):g} s" if variant else ""
             out["f_dev"] = f"f minus its median over the flight{lag}"
@@ -141,35 +131,18 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     return out
 
 
-def variables_of(axis: str, member: Terms) -> list[str]:
-    """The states and control `nonlinear-aero`'s `member` is a function of."""
-    return [variables(axis)[k] for k in member.which]
-
-
-def _smooth_terms(axis: str, member: Terms, state_index: dict, add_input, cutoff: float):
-    """`nonlinear-aero`'s terms (`_term`) for `member`: per state its smooth components in the
-    simulated state, per control its components of the measured cycle-averaged control (a
-    prepared input each, `add_input`), and the products of every two."""
-    ctrl = AXIS_INPUT[axis]
-    names = variables_of(axis, member)
-    out, slot = [], None
-    if ctrl in names:
-        slot = add_input(f"{ctrl}_slow", lambda fl: cycle_averaged(fl, (ctrl,), cutoff)[ctrl],
-                         term=False)
+def _smooth_terms(axis: str, member: Terms, state_index: dict):
+    """`nonlinear-aero`'s terms (`_term`) for `member`: per state its smooth components in
+    the simulated state, and the products of every two."""
+    names = [AXIS_STATES[axis][k] for k in member.which]
+    out = []
     for x in names:
         basis = member.bases.get(x)
         for k in range(member.df if basis is not None else 0):
-            if x == ctrl:
-                add_input(f"{ctrl}_s{k + 1}", lambda fl, k=k, b=basis: b(
-                    cycle_averaged(fl, (ctrl,), cutoff)[ctrl])[:, k], suffix=f"_{x}{k + 1}")
-            else:
-                out.append((f"_{x}{k + 1}", "smooth", (state_index[x], k), (), basis))
+            out.append((f"_{x}{k + 1}", "smooth", (state_index[x], k), (), basis))
     if member.products:
         for a, b in itertools.combinations(names, 2):
-            if b == ctrl:
-                out.append((f"_{a}{b}", "state-input", (state_index[a], slot), (), None))
-            else:
-                out.append((f"_{a}{b}", "cross", (state_index[a], state_index[b]), (), None))
+            out.append((f"_{a}{b}", "cross", (state_index[a], state_index[b]), (), None))
     return out
 
 
@@ -198,14 +171,12 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     left_out = []
     columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
 
-    def add_input(name, column, on=(), suffix=None, term=True):
+    def add_input(name, column, on=(), suffix=None):
         j = len(extra_inputs)
         extra_inputs.append(name)
         if column is not None:
             columns[name] = column
-        if term:
-            terms.append((suffix or name, "input", (j,), tuple(on), None))
-        return j
+        terms.append((suffix or name, "input", (j,), tuple(on), None))
 
     for name, variant in effects:
         if name in ("actuator-dynamics", "time-offset"):
@@ -233,7 +204,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
             if not isinstance(variant, Terms):  # no member made for flights: no form
                 left_out.append(name)
                 continue
-            terms.extend(_smooth_terms(axis, variant, state_index, add_input, cutoff))
+            terms.extend(_smooth_terms(axis, variant, state_index))
         elif name == "drift":
             add_input("time", lambda fl: elapsed(np.asarray(fl.t, dtype=float)))
             add_input("time2", lambda fl: elapsed(np.asarray(fl.t, dtype=float)) ** 2)

@@ -1,12 +1,15 @@
 """`nonlinear-aero`: cycle-averaged loads that are smooth, not linear, functions of the states
-and control of their axis (the terms beyond Eq. 2's first order: a bend, a saturation, a
-one-sided stall, quadratic drag).
+of their axis (the terms beyond Eq. 2's first order: a bend, a saturation, a one-sided
+stall, quadratic drag).
 
-The family is additive: per variable (the axis's states and control), `df` smooth components
+The family is additive: per state of the axis, `df` smooth components
 beyond the linear one (`_smooth.py`: a P-spline reduced to its smoothest `df` dimensions,
 even and odd shapes both in its span), and, as the low-order interactions of two
-variables, their products. Its members (`TERMS`) range from one variable's bend to every
-variable's finest shapes with the products; the member, and so the effective degrees of
+states, their products. The control's own nonlinearity (a saturation, a dead band) is
+`actuator-dynamics`' domain, as its filter is: a static nonlinearity of the deflection acting
+through the control derivative is what a servo does, and a family of the control here would
+take that effect's place. Its members (`TERMS`) range from one state's bend to every
+state's finest shapes with the products; the member, and so the effective degrees of
 freedom, is chosen by leave-one-flight-out error on the fitting flights (`Effect.sized`),
 never by a simulator's form.
 """
@@ -19,6 +22,7 @@ import itertools
 import numpy as np
 
 from .._signals import Signals
+from .._signals import AXIS_STATES
 from ._effect import Effect, axis_of, slow_of, variables
 from ._smooth import MAX_DF, Smooth, smooth_basis
 
@@ -26,7 +30,7 @@ from ._smooth import MAX_DF, Smooth, smooth_basis
 @dataclasses.dataclass(frozen=True)
 class Terms:
     """A member of the family: the smooth components `df` of the variables `which` (indices
-    into `variables(axis)`), with the products of every two of them when `products`;
+    into the axis's states), with the products of every two of them when `products`;
     `bases` (by variable name) are the fitting flights' (`bind`), not part of its identity."""
 
     which: tuple[int, ...]
@@ -45,7 +49,7 @@ class Terms:
                    {x: Smooth.from_json(b) for x, b in d.get("bases", {}).items()})
 
     def text(self, axis: str) -> str:
-        names = [variables(axis)[k] for k in self.which]
+        names = [AXIS_STATES[axis][k] for k in self.which]
         out = (f"smooth in {', '.join(names)} ({self.df} degree{'s' * (self.df > 1)} of "
                f"freedom each)") if self.df else ""
         if self.products:
@@ -53,7 +57,7 @@ class Terms:
         return out
 
 
-ALL = (0, 1, 2, 3)
+ALL = (0, 1, 2)
 #: The members, the whole family first (it decides the loads, `Engine.choose`): every
 #: variable at each size, with and without their products; each variable alone.
 TERMS = ((Terms(ALL, MAX_DF, True),)
@@ -64,7 +68,7 @@ TERMS = ((Terms(ALL, MAX_DF, True),)
 
 def columns_of(slow: dict, axis: str, terms: Terms) -> np.ndarray:
     """The member's columns from the cycle-averaged perturbations `slow` (by name)."""
-    names = variables(axis)
+    names = AXIS_STATES[axis]
     n = len(next(iter(slow.values())))
     cols = []
     for k in terms.which:
@@ -80,7 +84,7 @@ def columns_of(slow: dict, axis: str, terms: Terms) -> np.ndarray:
 
 def _columns(s: Signals, load, terms: Terms, h, dh):
     axis = axis_of(load)
-    return columns_of({x: slow_of(s, x) for x in variables(axis)}, axis, terms)
+    return columns_of({x: slow_of(s, x) for x in AXIS_STATES[axis]}, axis, terms)
 
 
 def smooth_bases(engine, idx) -> dict[str, Smooth | None]:
@@ -104,8 +108,8 @@ def _bind(effect: Effect, engine, idx) -> Effect:
 
 EFFECT = Effect(
     "nonlinear-aero",
-    "cycle-averaged loads smooth (not linear) functions of the states and control: "
-    "penalised splines of each and their products",
+    "cycle-averaged loads smooth (not linear) functions of the states: penalised splines "
+    "of each and their products",
     "averaged",
     _columns,
     TERMS,
