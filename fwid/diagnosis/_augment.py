@@ -84,9 +84,17 @@ class Augmented(eqx.Module):
 
     def __call__(self, x, u, p, c):
         ue = u[1:]
-        extra = [sum((p[f"{ld}{suffix}"] * _term(kind, idx, x, ue, basis)
-                      for suffix, kind, idx, on, basis in self.terms if not on or ld in on),
-                     0.0 * x[0])
+        smooth: dict = {}  # each state's smooth components, evaluated once a call
+        values = []
+        for _, kind, idx, _, basis in self.terms:
+            if kind == "smooth":
+                if (idx[0], id(basis)) not in smooth:
+                    smooth[(idx[0], id(basis))] = basis(x[idx[0]], xp=jnp)
+                values.append(smooth[(idx[0], id(basis))][idx[1]])
+            else:
+                values.append(_term(kind, idx, x, ue, basis))
+        extra = [sum((p[f"{ld}{t[0]}"] * v for t, v in zip(self.terms, values)
+                      if not t[3] or ld in t[3]), 0.0 * x[0])
                  for ld in AXIS_LOADS[self.axis]]
         out = self.base(x, u[:1], p, c)
         return out + (_load_rates(self.axis, extra, c) if self.rates else jnp.stack(extra))

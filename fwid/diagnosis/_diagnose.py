@@ -217,7 +217,8 @@ def diagnose(
         disturbance["leaves_red"] = {"effects": [e["effect"] for e in effects],
                                      "redness_after": effects[-1]["redness_after"]}
         effects, unexplained, in_sim = [], None, []
-    kept = adequate(kept, scores, disturbance["redness"], tracking)
+    kept = adequate(kept, scores, disturbance["redness"], tracking,
+                    set(disturbance.get("leaves_red", {}).get("effects", ())))
     candidates = scores.ranked(c.catalogue, sel, alpha)
     probe_rows = scores.ranked(c.probes, sel, alpha)
     verdict = verdict_of(effects, unexplained, disturbance)
@@ -297,13 +298,17 @@ def explain(c: Campaign, sel: Selection) -> tuple[Selection, list[dict]]:
     return sel, as_rows(best, found[0])
 
 
-def adequate(kept: list[dict], scores: Scores, before: float, tracking: set) -> list[dict]:
+def adequate(kept: list[dict], scores: Scores, before: float, tracking: set,
+             tracked: set) -> list[dict]:
     """The confidence set without the explanations that track a disturbance: those holding
-    an entry built on the states' dynamics or a probe (`tracking`) that do not whiten the
-    residual (`whitens`, the verdict's test; each such row carries its `redness_after`);
-    `before`: the baseline residual's redness."""
+    an entry the verdict found tracking it (`tracked`), and those holding an entry built on
+    the states' dynamics or a probe (`tracking`) that do not whiten the residual (`whitens`,
+    the verdict's test; each such row carries its `redness_after`); `before`: the baseline
+    residual's redness."""
     out = []
     for row in kept:
+        if tracked & set(row["explanation"]):
+            continue
         if tracking & set(row["explanation"]):
             row["redness_after"] = scores.redness_of(row["explanation"])
             if not whitens(before, row["redness_after"]):
