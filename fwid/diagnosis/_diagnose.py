@@ -210,13 +210,10 @@ def diagnose(
     sel, kept = explain(c, sel)
     effects, unexplained, in_sim = scores.named(sel)
     tracking = {e.name for e in c.candidates if e.filters_states or e.probe}
-    if effects and tracking & {e["effect"] for e in effects} and not whitens(
-            disturbance["redness"], effects[-1]["redness_after"]):
-        # an explanation built on the states' dynamics that leaves the residual about as
-        # red as before: it tracked a disturbance that drove the states
-        disturbance["leaves_red"] = {"effects": [e["effect"] for e in effects],
-                                     "redness_after": effects[-1]["redness_after"]}
-        effects, unexplained, in_sim = [], None, []
+    k, red = untracked(effects, disturbance["redness"], tracking)
+    if red is not None:
+        disturbance["leaves_red"] = red
+        effects, in_sim, unexplained = effects[:k], in_sim[:k], None
     kept = adequate(kept, scores, disturbance["redness"], tracking,
                     set(disturbance.get("leaves_red", {}).get("effects", ())))
     candidates = scores.ranked(c.catalogue, sel, alpha)
@@ -296,6 +293,20 @@ def explain(c: Campaign, sel: Selection) -> tuple[Selection, list[dict]]:
         sel = dataclasses.replace(sel, chosen=sequential(c.engine, c.halves, sel.first,
                                                          best[0].effects))
     return sel, as_rows(best, found[0])
+
+
+def untracked(effects: list[dict], redness: float, tracking: set) -> tuple[int, dict | None]:
+    """How many of the named `effects` (rows in the order added, each with the
+    `redness_after` it left) stand: up to the first entry built on the states' dynamics
+    (`tracking`) that leaves what it entered on about as red as before (`whitens`; from the
+    baseline's `redness`): it tracked a disturbance that drove the states, and goes with what
+    came after it. Returns the count and, when one went, `{"effects", "redness_after"}`."""
+    before = redness
+    for k, row in enumerate(effects):
+        if row["effect"] in tracking and not whitens(before, row["redness_after"]):
+            return k, {"effects": [row["effect"]], "redness_after": row["redness_after"]}
+        before = row["redness_after"]
+    return len(effects), None
 
 
 def adequate(kept: list[dict], scores: Scores, before: float, tracking: set,

@@ -167,3 +167,17 @@ def test_a_load_that_follows_the_attitude_is_unexplained_with_theta_first(effect
     assert d.verdict not in EFFECT_NAMES
     assert d.unexplained["drivers"][0]["signal"] == "theta"
     assert "M" in d.unexplained["affected"]
+
+
+def test_an_entry_that_tracks_a_disturbance_goes_with_what_came_after_it():
+    """`unsteady-aero` after a time offset that leaves the residual red: the offset stands,
+    the lag goes; first, it takes everything; one that whitens stays."""
+    from fwid.diagnosis._diagnose import untracked
+
+    rows = [{"effect": "time-offset", "redness_after": 1.2},
+            {"effect": "unsteady-aero", "redness_after": 3.3}]
+    k, red = untracked(rows, 4.0, {"unsteady-aero", "attitude"})
+    assert k == 1 and red == {"effects": ["unsteady-aero"], "redness_after": 3.3}
+    assert untracked(rows[1:], 4.0, {"unsteady-aero"})[0] == 0
+    assert untracked(rows[1:], 8.0, {"unsteady-aero"}) == (1, None)  # whitened by 2.4x
+    assert untracked(rows, 4.0, set()) == (2, None)  # none built on the states' dynamics
