@@ -28,14 +28,19 @@ def right(r: dict) -> bool | None:
     `effects`)."""
     if "verdict" not in r:
         return None
+    named = r.get("effects") or ([r["verdict"]] if r["verdict"] != "none" else [])
+    return _scored(r, r["verdict"], named)
+
+
+def _scored(r: dict, verdict: str, named) -> bool:
+    """Whether `verdict` (pairs: the effects `named`) answers case `r` (`right`)."""
     if r["kind"] == "single":
-        return r["verdict"] == r["effect"]
+        return verdict == r["effect"]
     if r["kind"] == "clean":
-        return r["verdict"] == "none"
+        return verdict == "none"
     if r["kind"] == "out":
-        return r["verdict"] in NOT_NAMED
-    named = set(r.get("effects") or ([r["verdict"]] if r["verdict"] != "none" else []))
-    return set(r["effect"].split("+")) <= named
+        return verdict in NOT_NAMED
+    return set(r["effect"].split("+")) <= set(named)
 
 
 def extras(results) -> list[str]:
@@ -238,13 +243,7 @@ def peer_right(r: dict, who: str) -> bool | None:
     p = r.get(who) or {}
     if "verdict" not in p:
         return None
-    if r["kind"] == "single":
-        return p["verdict"] == r["effect"]
-    if r["kind"] == "clean":
-        return p["verdict"] == "none"
-    if r["kind"] == "out":
-        return p["verdict"] in NOT_NAMED
-    return set(r["effect"].split("+")) <= set(p.get("kept") or [])
+    return _scored(r, p["verdict"], p.get("kept") or [])
 
 
 def peer_table(results) -> list[str]:

@@ -57,9 +57,8 @@ def close_pair(diag: dict) -> list[tuple[str, object]]:
     flights cannot tell them apart); for a report without a set, the first effect with a
     near-tie runner-up, else the first effect and its runner-up; else the two best-ranked
     candidates."""
-    from ..diagnosis._confidence import rivals
-
     from ..diagnosis._catalogue import member_from_json
+    from ..diagnosis._confidence import rivals
 
     variants = {c["effect"]: c.get("variant") for c in diag.get("candidates", [])}
     members = {c["effect"]: c["member"] for c in diag.get("candidates", []) if "member" in c}
@@ -139,19 +138,20 @@ def control_map(model, axis: str, variant_of_control):
         _, ys = jax.lax.scan(step, jnp.asarray(zi) * u[0], u)
         return ys
 
-    def static(u, kind, size):
-        """The servo's static nonlinearity (`actuator_dynamics.static`)."""
-        if kind == "saturation":
-            return jnp.clip(u, -size, size)
-        if kind == "dead-band":
-            return jnp.sign(u) * jnp.maximum(jnp.abs(u) - size, 0.0)
-
+    def play(u, size):
+        """The backlash of `_filters.backlash`, traced."""
         def step(y, x):
             y = jnp.where(x > y + size / 2, x - size / 2, jnp.where(x < y - size / 2,
                                                                    x + size / 2, y))
             return y, y
         _, ys = jax.lax.scan(step, u[0], u)
         return ys
+
+    def static(u, kind, size):
+        """The servo's static nonlinearity, in JAX."""
+        from ..diagnosis._catalogue.actuator_dynamics import static as servo
+
+        return servo(u, kind, size, xp=jnp, play=play)
 
     def inputs(t, u):
         x = u

@@ -53,17 +53,16 @@ IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
           "lon-lat-coupling", "nonlinear-aero", "attitude", "drift")
 
 
-def _term(kind: str, idx: tuple, x, ue, basis):
+def _term(kind: str, idx: tuple, x, ue):
     """One extra-load term: the extra input `ue[i]` (`"input"`), the state `x[i]`
-    (`"state"`), the product `x[i] x[j]` (`"cross"`), or the smooth component `j` of `basis`
-    at `x[i]` (`"smooth"`), with `(i, j) = idx`."""
+    (`"state"`) or the product `x[i] x[j]` (`"cross"`), with `(i, j) = idx`. (A `"smooth"`
+    term, the component `j` of its basis at `x[i]`, is evaluated in `Augmented`, once per
+    state and call.)"""
     if kind == "input":
         return ue[idx[0]]
     if kind == "state":
         return x[idx[0]]
-    if kind == "cross":
-        return x[idx[0]] * x[idx[1]]
-    return basis(x[idx[0]], xp=jnp)[idx[1]]
+    return x[idx[0]] * x[idx[1]]
 
 
 class Augmented(eqx.Module):
@@ -92,7 +91,7 @@ class Augmented(eqx.Module):
                     smooth[(idx[0], id(basis))] = basis(x[idx[0]], xp=jnp)
                 values.append(smooth[(idx[0], id(basis))][idx[1]])
             else:
-                values.append(_term(kind, idx, x, ue, basis))
+                values.append(_term(kind, idx, x, ue))
         extra = [sum((p[f"{ld}{t[0]}"] * v for t, v in zip(self.terms, values)
                       if not t[3] or ld in t[3]), 0.0 * x[0])
                  for ld in AXIS_LOADS[self.axis]]
@@ -175,7 +174,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     control = ctrl
     shift = None  # (kind, tau) applied to the control column
     extra_inputs: list[str] = []
-    terms: list[tuple] = []  # (suffix, kind, indices, loads) per own load (`_term`)
+    terms: list[tuple] = []  # (suffix, kind, indices, loads, basis) (`Augmented`)
     left_out = []
     columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
 

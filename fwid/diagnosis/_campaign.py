@@ -72,7 +72,6 @@ def campaign(train: Sequence[Flight], test: Sequence[Flight], axis: str, cutoff:
     sigma2 = engine.mean_square(train_idx)
     # each family made for the training flights (its bases' range, its quasi-steady load)
     bound = tuple(e.bound(engine, train_idx) for e in catalogue)
-    engine.catalogue = bound + tuple(probes)
     halves = cross_fit_folds(engine, n_tr + n_te, [p for p, _ in tr_par + te_par], n_tr,
                              folds)
     return Campaign(list(train), list(test), axis, cutoff, loads, tr_sig, te_sig, engine,

@@ -42,6 +42,9 @@ class Scores:
         self.base = self.residuals(())
         self.before = [self.full(r) for r in self.base]
         self.rms_before = self.rms_by_load(self.before)
+        #: The test flights' sample steps; the manoeuvred axis's loads' baseline mean squares.
+        self.dts = [sig.dt for sig in c.te_sig]
+        self.scale = {ld: c.sigma2[(ld, "averaged")] for ld in c.own}
         #: The held-out load residuals after each candidate or probe alone (`row`).
         self.augmented: dict = {}
 
@@ -77,30 +80,36 @@ class Scores:
                if gains[ld] >= max(self.min_gain, AFFECTED_SHARE * top)]
         return hit or [max(gains, key=gains.get)]
 
+    def _slow(self, res) -> list[dict]:
+        """The manoeuvred axis's cycle-averaged part of the residuals `res` (per test flight,
+        by channel), by load."""
+        return [{ld: r[(ld, "averaged")] for ld in self.c.own} for r in res]
+
     def redness(self, res) -> float:
-        """The colour of the manoeuvred axis's cycle-averaged residual (`_disturbance.py`)."""
-        own = self.c.own
-        slow = [{ld: r[(ld, "averaged")] for ld in own} for r in res]
-        return colour(slow, [s.dt for s in self.c.te_sig], own,
-                      {ld: self.c.sigma2[(ld, "averaged")] for ld in own})["redness"]
+        """The colour of the manoeuvred axis's cycle-averaged residual (`_disturbance.py`),
+        each load scaled by its baseline mean square."""
+        return colour(self._slow(res), self.dts, self.c.own, self.scale)["redness"]
+
+    def models(self, effects):
+        """Each effect of `effects` with the model of it and those before it, fitted on the
+        training flights in that order, as the selection adds them."""
+        c, model = self.c, ()
+        for e in effects:
+            model = model + ((e, c.engine.choose(c.train_idx, model, e, c.sigma2)),)
+            yield e, model
 
     def redness_of(self, names) -> float:
         """The redness the explanation of the effects `names` leaves (fitted in that order, as
         the selection would add them)."""
-        c, by = self.c, {e.name: e for e in self.c.candidates}
-        model = ()
-        for n in names:
-            e = by[n]
-            model = model + ((e, c.engine.choose(c.train_idx, model, e, c.sigma2)),)
-        return self.redness(self.residuals(model))
+        by = {e.name: e for e in self.c.candidates}
+        models = [m for _, m in self.models(by[n] for n in names)]
+        return self.redness(self.residuals(models[-1] if models else ()))
 
     def disturbance(self) -> dict:
         """The baseline's cycle-averaged held-out residual: its colour, size and spectrum."""
-        own = self.c.own
-        slow = [{ld: r[(ld, "averaged")] for ld in own} for r in self.base]
-        dts = [s.dt for s in self.c.te_sig]
-        out = colour(slow, dts, own, {ld: self.c.sigma2[(ld, "averaged")] for ld in own})
-        out.update(spectrum(slow, dts, own), red_min=RED_MIN)
+        slow = self._slow(self.base)
+        out = colour(slow, self.dts, self.c.own, self.scale)
+        out.update(spectrum(slow, self.dts, self.c.own), red_min=RED_MIN)
         return out
 
     def named(self, sel: Selection):
@@ -108,9 +117,8 @@ class Scores:
         says (`unexplained`), and the `(name, member)` of the effects for the simulation."""
         c = self.c
         named = {e.name for e in c.catalogue}
-        effects, unexplained, model, prev, in_sim = [], None, (), self.rms_before, []
-        for e, ev in sel.chosen:
-            model = model + ((e, c.engine.choose(c.train_idx, model, e, c.sigma2)),)
+        effects, unexplained, prev, in_sim = [], None, self.rms_before, []
+        for (e, ev), (_, model) in zip(sel.chosen, self.models(e for e, _ in sel.chosen)):
             res = self.residuals(model)
             now = self.rms_by_load([self.full(r) for r in res])
             affected = self.affected(ev)

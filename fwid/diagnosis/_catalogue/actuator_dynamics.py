@@ -31,13 +31,15 @@ NONLINEAR = {"saturation": (0.5, 0.75), "dead-band": (0.1, 0.2), "backlash": (0.
 NONLINEAR_LAGS = (0.02, 0.05)
 
 
-def static(x: np.ndarray, kind: str, size: float) -> np.ndarray:
-    """The nonlinearity `kind` of `size` [rad] on the deflection perturbation `x`."""
+def static(x, kind: str, size: float, xp=np, play=backlash):
+    """The nonlinearity `kind` of `size` [rad] on the deflection perturbation `x`; `xp` the
+    array module and `play` the backlash (`_filters.backlash`; a traced one in the design's
+    JAX control map)."""
     if kind == "saturation":
-        return np.clip(x, -size, size)
+        return xp.clip(x, -size, size)
     if kind == "dead-band":
-        return np.sign(x) * np.maximum(np.abs(x) - size, 0.0)
-    return backlash(x, size)
+        return xp.sign(x) * xp.maximum(xp.abs(x) - size, 0.0)
+    return play(x, size)
 
 
 def actuator_filter(x: np.ndarray, dt: float, variant: tuple) -> np.ndarray:

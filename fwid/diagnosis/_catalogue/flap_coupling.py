@@ -22,7 +22,7 @@ import dataclasses
 import numpy as np
 
 from .._signals import Signals
-from ._effect import Effect, slow_of, variables
+from ._effect import Effect, axis_of, slow_of, variables
 from .nonlinear_aero import smooth_bases
 
 
@@ -75,7 +75,7 @@ def _columns(s: Signals, load, m: Modulation, h, dh):
 def _bind(effect: Effect, engine, idx) -> Effect:
     """The members for the manoeuvred axis, with its variables' smooth bases over the
     fitting flights (`nonlinear-aero`'s)."""
-    axis = "lon" if not engine.own or engine.own[0] in ("X", "Z", "M") else "lat"
+    axis = axis_of(engine.own[0]) if engine.own else "lon"
     bases = smooth_bases(engine, idx)
     return dataclasses.replace(effect, variants=tuple(
         dataclasses.replace(v, axis=axis, bases=bases) for v in effect.variants))
