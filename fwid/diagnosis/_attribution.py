@@ -97,6 +97,25 @@ def simplest_best(costs) -> int:
     return next(k for k, c in enumerate(costs) if c <= least + TIE_RTOL * abs(least))
 
 
+def one_standard_error(errors: Sequence[np.ndarray], sizes: Sequence[int]) -> int:
+    """The member a leave-one-out comparison picks by the one-standard-error rule (Breiman
+    et al. 1984; Hastie, Tibshirani & Friedman, Sec. 7.10): `errors[k]` are member `k`'s
+    errors on each left-out unit, `sizes[k]` its number of columns. Of the members whose
+    total error is within one standard error of the least (that of the best member's total,
+    from the spread of its units' errors), the fewest columns; among those, the least
+    error (`simplest_best`). The least of many leave-one-out errors is biased low, and a
+    larger member that wins by less than its own noise would fit more of it; members of one
+    size are compared by their error alone."""
+    costs = [float(np.sum(e)) for e in errors]
+    best = simplest_best(costs)
+    n = len(errors[best])
+    se = float(np.std(errors[best], ddof=1) * np.sqrt(n)) if n > 1 else 0.0
+    within = [k for k, c in enumerate(costs) if c <= costs[best] + se]
+    fewest = min(sizes[k] for k in within)
+    keep = [k for k in within if sizes[k] == fewest]
+    return keep[simplest_best([costs[k] for k in keep])]
+
+
 class Engine:
     """Fits the baseline plus any model of `catalogue` effects to the `loads` of some units and
     scores it on others. Designs, units' normal equations and fits are cached, so forward selection
@@ -206,16 +225,19 @@ class Engine:
         an effect whose variants differ in size (`Effect.sized`), the least
         leave-one-unit-out error instead (with fewer than three units, the training error).
         Of members that tie, the first (the variants are listed simplest first): a rate limit
-        that never binds is a plain lag, and must not be reported as a rate limit."""
+        that never binds is a plain lag, and must not be reported as a rate limit. Members of
+        different sizes are weighed by the one-standard-error rule (`one_standard_error`)."""
         if len(effect.variants) == 1:
             return effect.variants[0]
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         if effect.sized and len(idx) >= 3:
-            costs = [sum(self.loo_error(idx, ch, model + ((effect, v),)) / sigma2[ch]
-                         for ch in chans) for v in effect.variants]
-        else:
-            costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
-                         for ch in chans) for v in effect.variants]
+            loo = [[self.loo_errors(idx, ch, model + ((effect, v),)) for ch in chans]
+                   for v in effect.variants]
+            return effect.variants[one_standard_error(
+                [sum(e / sigma2[ch] for (e, _), ch in zip(m, chans)) for m in loo],
+                [sum(k for _, k in m) for m in loo])]
+        costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
+                     for ch in chans) for v in effect.variants]
         return effect.variants[simplest_best(costs)]
 
     def choose(self, idx, model: Model, effect: Effect, sigma2: dict) -> OnLoads:
@@ -240,15 +262,20 @@ class Engine:
         return OnLoads(v, loads)
 
     def loo_error(self, idx, channel, model: Model) -> float:
-        """Leave-one-unit-out error of `channel` over the units `idx`: each unit's sum of
-        squares under the fit to the others, from the units' normal equations (cached: every
+        """Leave-one-unit-out error of `channel` over the units `idx`: the sum of
+        `loo_errors`."""
+        return float(np.sum(self.loo_errors(idx, channel, model)[0]))
+
+    def loo_errors(self, idx, channel, model: Model) -> tuple[np.ndarray, int]:
+        """Each unit's sum of squares of `channel` under the fit to the other units of `idx`,
+        from the units' normal equations, and the number of columns fitted (cached: every
         candidate of a round compares with the same model without it)."""
         key = (tuple(idx), channel, tuple((e.name, v) for e, v in acting(model, channel)))
         if key not in self._loo:
             parts = [self.normal_equations(i, channel, model) for i in idx]
             A, b, c = (np.stack([p[j] for p in parts]) for j in range(3))
             th = solve_stack(A.sum(0) - A, b.sum(0) - b)  # each unit left out in turn
-            self._loo[key] = float(np.sum(error((A, b, c), th)))
+            self._loo[key] = (error((A, b, c), th), A.shape[-1])
         return self._loo[key]
 
     def block_errors(self, fit_idx, score_idx, model: Model, band: str) -> np.ndarray:

@@ -19,7 +19,7 @@ from ._provenance import provenance
 from ._scores import Scores
 from ._selection import ALPHA, MIN_GAIN, Selection, forward_select
 from ._significance import BLOCK_S
-from ._simulation import EarlyFits, SimulationGap, simulation_gap, start_baseline
+from ._simulation import EarlyFits, SimulationGap, simulation_gap
 
 
 @dataclasses.dataclass
@@ -200,7 +200,6 @@ def diagnose(
     """
     say = progress or (lambda msg: None)
     c = campaign(train, test, axis, cutoff, catalogue, probes, folds, say)
-    baseline = start_baseline(train, test, axis, cutoff) if simulation else None
     early = EarlyFits(train, test, axis, cutoff) if simulation else None
     sel = select(c, alpha, min_gain, early, say)
     say("re-fitting on the training flights, scoring on the test flights")
@@ -232,8 +231,9 @@ def diagnose(
     if simulation:
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
             + " fitted by output error on the training flights, simulated on the test flights")
-        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=baseline.result(),
+        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=early.baseline.result(),
                              augmented=early.get(in_sim))
+        early.close()
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,
                "candidates": {k: {"p": ev.p, "t": ev.t, "gain_pct": 100.0 * ev.gain,

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fwid.diagnosis._attribution import Engine, OnLoads, acting, simplest_best, units
+from fwid.diagnosis._attribution import (Engine, OnLoads, acting, one_standard_error,
+                                         simplest_best, units)
 from fwid.diagnosis._catalogue import actuator_filter, get_effect
 from fwid.diagnosis._catalogue.nonlinear_aero import columns_of
 from fwid.diagnosis._signals import Signals
@@ -37,6 +38,16 @@ def _engine(rng, count=6, **kw):
     return Engine(units([_flight(rng, k, **kw) for k in range(count)]), ("X", "Z", "M"))
 
 
+def _refitted(eng, idx, k, ch, model) -> float:
+    """Unit `k`'s error in `ch` under `model` refitted here on the other units of `idx`."""
+    others = [i for i in idx if i != k]
+    a = np.concatenate([eng.units[i].projector["averaged"](eng.design(i, ch, model))
+                        for i in others])
+    b = np.concatenate([eng.units[i].projector["averaged"](eng.target(i, ch)) for i in others])
+    theta, *_ = np.linalg.lstsq(a, b, rcond=None)
+    return float(np.sum(eng.residual(k, ch, theta, model) ** 2))
+
+
 def test_leave_one_flight_out_error_matches_refitting_without_each_flight():
     rng = np.random.default_rng(3)
     eng = _engine(rng)
@@ -44,15 +55,7 @@ def test_leave_one_flight_out_error_matches_refitting_without_each_flight():
     nl = get_effect("nonlinear-aero").bound(eng, idx)  # its splines over these flights
     model = ((nl, nl.variants[0]),)
     for ch in (("M", "averaged"), ("Z", "averaged")):
-        ref = 0.0
-        for k in idx:
-            others = [i for i in idx if i != k]
-            a = np.concatenate([eng.units[i].projector["averaged"](eng.design(i, ch, model))
-                                for i in others])
-            b = np.concatenate([eng.units[i].projector["averaged"](eng.target(i, ch))
-                                for i in others])
-            theta, *_ = np.linalg.lstsq(a, b, rcond=None)
-            ref += float(np.sum(eng.residual(k, ch, theta, model) ** 2))
+        ref = sum(_refitted(eng, idx, k, ch, model) for k in idx)
         assert np.isclose(eng.loo_error(idx, ch, model), ref, rtol=1e-8)
 
 
@@ -131,3 +134,36 @@ def test_a_member_that_acts_as_a_simpler_one_is_not_chosen():
     assert ("lag", 0.05) in ties and any(v[0] == "rate-limit" for v in ties)
     assert eng.best_variant(idx, (), e, sigma2) == ("lag", 0.05)
     assert simplest_best([3.0, 1.0, 1.0 + 1e-12, 0.5 + 1e-10, 0.5]) == 3
+
+
+def test_the_one_standard_error_rule_takes_the_fewest_columns_near_the_best():
+    best = np.array([10.0, 12.0, 8.0, 10.0])  # total 40, standard error of the total 3.27
+    se = np.std(best, ddof=1) * 2.0
+    errors = [best, best + 0.7, best + 0.9, best - 0.1, best + 5.0]
+    sizes = [8, 4, 4, 12, 1]
+    # within 40.4 + se: members 0 to 3; the fewest columns: 1 and 2; of them the least error
+    assert 3 * 0.9 < se and 4 * 5.0 > se
+    assert one_standard_error(errors, sizes) == 1
+    # members of one size: the least error, as before the rule
+    assert one_standard_error(errors, [1] * 5) == 3
+    # nothing near the best: the best
+    assert one_standard_error([best, best + 10.0], [5, 1]) == 0
+
+
+def test_the_member_is_the_rules_choice_on_refitted_leave_one_out_errors():
+    rng = np.random.default_rng(5)
+    eng = _engine(rng, count=8, quadratic_on_m=0.3)
+    idx = tuple(range(8))
+    nl = get_effect("nonlinear-aero").bound(eng, idx)
+    chans = eng.channels("averaged")
+    errors, sizes = [], []
+    for v in nl.variants:  # each flight scored by a fit to the others, refitted here
+        model = ((nl, v),)
+        errors.append(np.array([sum(_refitted(eng, idx, k, ch, model) for ch in chans)
+                                for k in idx]))
+        sizes.append(sum(eng.design(0, ch, model).shape[1] for ch in chans))
+    chosen = eng.best_variant(idx, (), nl, {ch: 1.0 for ch in chans})
+    assert chosen == nl.variants[one_standard_error(errors, sizes)]
+    least = int(np.argmin([e.sum() for e in errors]))
+    assert chosen.which == nl.variants[least].which == (1,)  # the bend of w
+    assert sizes[nl.variants.index(chosen)] < sizes[least]  # smaller, within its noise

@@ -192,22 +192,21 @@ def test_an_augmented_model_that_diverges_is_recorded_not_raised(effect_flights,
 
 
 def test_the_augmented_fit_started_early_gives_the_same_block(effect_flights):
-    """`start_augmented` (the fit begun in a worker thread when the selection's first round
-    has its leader, beside the baseline's fit, which it does not wait for) and the fit made
-    after the verdict give one simulation block, to the digit."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from fwid.diagnosis._simulation import fit_baseline, start_augmented
+    """`EarlyFits` (the fits begun in a worker thread: the baseline's at once, the augmented
+    model's when the selection's first round has its leader) and the fit made after the
+    verdict give one simulation block, to the digit."""
+    from fwid.diagnosis._simulation import EarlyFits
 
     train, test = (fwid.load_flights(p) for p in effect_flights(
         "actuator-dynamics", strength=1.0, seed=6, n_train=4, n_test=4))
     effects = [("actuator-dynamics", ("lag", 0.05))]
-    with ThreadPoolExecutor(1) as pool:
-        baseline = pool.submit(fit_baseline, train, test, "lon")
-        early = start_augmented(train, test, "lon", effects, 5.0)
-        late = simulation_gap(train, test, "lon", effects, baseline=baseline.result())
-        made_early = simulation_gap(train, test, "lon", effects, baseline=baseline.result(),
-                                    augmented=early)
+    early = EarlyFits(train, test, "lon", 5.0)
+    early.start(effects)
+    assert early.get([("actuator-dynamics", ("lag", 0.1))]) is None
+    late = simulation_gap(train, test, "lon", effects, baseline=early.baseline.result())
+    made_early = simulation_gap(train, test, "lon", effects, baseline=early.baseline.result(),
+                                augmented=early.get(effects))
+    early.close()
     assert made_early.augmented is not late.augmented
     assert made_early.summary["shrink_pct"] == late.summary["shrink_pct"] > 10.0
     assert made_early.summary["test_rms_after"] == late.summary["test_rms_after"]

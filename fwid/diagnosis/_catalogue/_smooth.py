@@ -19,6 +19,7 @@ would blow up, and the edge slope of a fine component is steep).
 from __future__ import annotations
 
 import dataclasses
+import weakref
 
 import numpy as np
 from scipy.interpolate import BSpline, PPoly
@@ -38,13 +39,31 @@ class Smooth:
 
     breaks: np.ndarray
     coef: np.ndarray
+    #: `at`'s values by the signal they were taken of (not part of the function).
+    _memo: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def at(self, x: np.ndarray) -> np.ndarray:
+        """`self(x)` for a signal array that is evaluated again and again (a flight's
+        cycle-averaged state, once per member and load that reads it): kept while `x`
+        lives, so every member slices the one evaluation."""
+        key = id(x)
+        held = self._memo.get(key)
+        if held is not None and held[0]() is x:
+            return held[1]
+        value = self(x)
+        self._memo[key] = (weakref.ref(x), value)
+        return value
 
     def __call__(self, x, xp=np):
         """The components at `x` (any shape): `x.shape + (df,)`; `xp` the array module
         (`jax.numpy` inside a model's equations)."""
         breaks, coef = xp.asarray(self.breaks), xp.asarray(self.coef)
         xc = xp.clip(xp.asarray(x, dtype=float), breaks[0], breaks[-1])
-        i = xp.clip(xp.searchsorted(breaks, xc, side="right") - 1, 0, len(self.breaks) - 2)
+        # in JAX, inside the equations' integration loop: a dozen comparisons at once beat
+        # a binary search's sequential loop (a fifth of an augmented fit's time)
+        how = {} if xp is np else {"method": "compare_all"}
+        i = xp.clip(xp.searchsorted(breaks, xc, side="right", **how) - 1, 0,
+                    len(self.breaks) - 2)
         d = (xc - breaks[i])[..., None]
         c = coef[:, i, :]
         return ((c[0] * d + c[1]) * d + c[2]) * d + c[3]

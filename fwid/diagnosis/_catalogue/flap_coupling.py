@@ -63,7 +63,7 @@ def _columns(s: Signals, load, m: Modulation, h, dh):
         v = slow_of(s, x)
         mods.append(v[:, None])
         if m.smooth and m.bases.get(x) is not None:
-            mods.append(m.bases[x](v)[:, :1])
+            mods.append(m.bases[x].at(v)[:, :1])
     g = np.concatenate(mods, axis=1)  # (n, functions)
     if m.per_harmonic:
         carriers = np.concatenate([h, dh], axis=1)  # (n, 2 harmonics)

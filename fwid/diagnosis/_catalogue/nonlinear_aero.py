@@ -74,7 +74,8 @@ def columns_of(slow: dict, axis: str, terms: Terms) -> np.ndarray:
     for k in terms.which:
         basis: Smooth | None = terms.bases.get(names[k])
         if terms.df and basis is not None:
-            cols.append(basis(slow.get(names[k], np.zeros(n)))[:, :terms.df])
+            x = slow.get(names[k])
+            cols.append((basis(np.zeros(n)) if x is None else basis.at(x))[:, :terms.df])
     if terms.products:
         for a, b in itertools.combinations(terms.which, 2):
             cols.append((slow.get(names[a], np.zeros(n)) * slow.get(names[b], np.zeros(n)))
