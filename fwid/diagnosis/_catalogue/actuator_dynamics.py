@@ -7,7 +7,9 @@ second-order servo) and the classical servo nonlinearities, each of one to three
 from a grid: a rate limit, a direction-dependent lag, and, before or after a first-order
 lag (Hammerstein and Wiener forms), a saturation, a dead band and a backlash (play in the
 linkage, the one with memory). The nonlinearities' sizes are fractions of the fitting
-flights' largest deflection (`bind`). The member is chosen by leave-one-flight-out error on
+flights' largest deflection, the rate limits fractions of their fastest deflection rate
+(`bind`): a limit only shows where the flights reach it, whatever the surface, its units
+or the manoeuvre's size. The member is chosen by leave-one-flight-out error on
 the fitting flights, as `nonlinear-aero`'s size. The grids are generic (servo bandwidths of
 a few to tens of Hz, rates of a fraction to tens of rad/s), not a simulator's values.
 """
@@ -29,6 +31,10 @@ LAGS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2)
 NONLINEAR = {"saturation": (0.5, 0.75), "dead-band": (0.1, 0.2), "backlash": (0.1, 0.2)}
 #: Their lags [s].
 NONLINEAR_LAGS = (0.02, 0.05)
+#: The rate limits, as fractions of the fastest deflection rate (`bind` makes them rad/s),
+#: and their lags [s].
+RATE_LIMITS = (0.2, 0.4, 0.7)
+RATE_LAGS = (0.02, 0.05)
 
 
 def static(x, kind: str, size: float, xp=np, play=backlash):
@@ -86,7 +92,7 @@ ACTUATOR_FILTERS = (
     tuple(("lag", t) for t in LAGS) + tuple(("delay", t) for t in LAGS)
     + tuple(("lag-delay", t, T) for t in (0.02, 0.05, 0.1) for T in (0.02, 0.05))
     + tuple(("second-order", fn, z) for fn in (4.0, 8.0, 16.0) for z in (0.5, 0.8))
-    + tuple(("rate-limit", t, r) for t in (0.02, 0.05) for r in (1.0, 3.0, 10.0))
+    + tuple(("rate-limit", t, r) for t in RATE_LAGS for r in RATE_LIMITS)
     + tuple(("asymmetric", a, b) for a, b in ((0.02, 0.1), (0.1, 0.02), (0.03, 0.07),
                                                (0.07, 0.03)))
     + tuple((k, t, s, order) for k, sizes in NONLINEAR.items() for order in ("before", "after")
@@ -107,7 +113,7 @@ def filter_text(variant: tuple) -> str:
             "delay": lambda: f"delay {p[0]:g} s",
             "lag-delay": lambda: f"delay {p[1]:g} s and first-order lag, tau = {p[0]:g} s",
             "second-order": lambda: f"second-order lag, {p[0]:g} Hz, damping {p[1]:g}",
-            "rate-limit": lambda: f"first-order lag, tau = {p[0]:g} s, rate limit {p[1]:g}/s",
+            "rate-limit": lambda: f"first-order lag, tau = {p[0]:g} s, rate limit {p[1]:.3g}/s",
             "asymmetric": lambda: f"direction-dependent lag, tau = {p[0]:g} s rising, "
                                   f"{p[1]:g} s falling"}[kind]()
 
@@ -118,16 +124,25 @@ def _columns(s: Signals, load, variant, h, dh):
 
 def _bind(effect: Effect, engine, idx) -> Effect:
     """The members with their nonlinearities sized on the fitting units' largest deflection
-    of the manoeuvred axis's control (its 99th percentile of `|d|`)."""
+    of the manoeuvred axis's control (its 99th percentile of `|d|`), their rate limits on its
+    fastest rate (the 99th percentile of `|d'|`, the cycle-averaged deflection's); members
+    that cannot be sized (a control that never moves) go."""
     axis = axis_of(engine.own[0]) if engine.own else "lon"
-    d = [np.abs(engine.units[i].signals.slow[AXIS_INPUT[axis]]) for i in idx
-         if AXIS_INPUT[axis] in engine.units[i].signals.slow]
-    scale = float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
-    if not scale > 0.0:
-        return dataclasses.replace(effect, variants=tuple(
-            v for v in effect.variants if v[0] not in NONLINEAR))
-    return dataclasses.replace(effect, variants=tuple(
-        (v[0], v[1], v[2] * scale, v[3]) if v[0] in NONLINEAR else v for v in effect.variants))
+    units = [engine.units[i].signals for i in idx
+             if AXIS_INPUT[axis] in engine.units[i].signals.slow]
+    d = [np.abs(s.slow[AXIS_INPUT[axis]]) for s in units]
+    rates = [np.abs(np.diff(s.slow[AXIS_INPUT[axis]])) / s.dt for s in units
+             if len(s.slow[AXIS_INPUT[axis]]) > 1]
+    scale = {kind: float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
+             for kind in NONLINEAR}
+    scale["rate-limit"] = float(np.percentile(np.concatenate(rates), 99.0)) if rates else 0.0
+    out = []
+    for v in effect.variants:
+        if v[0] not in scale:
+            out.append(v)
+        elif scale[v[0]] > 0.0:
+            out.append((v[0], v[1], v[2] * scale[v[0]], *v[3:]))
+    return dataclasses.replace(effect, variants=tuple(out))
 
 
 EFFECT = Effect(

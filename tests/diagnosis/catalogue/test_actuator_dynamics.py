@@ -101,16 +101,26 @@ def test_backlash_holds_until_the_input_crosses_its_play():
     assert np.all(np.diff(y[turn:end]) == 0.0) and y[end + 5] < y[turn]
 
 
-def test_the_nonlinear_members_are_sized_on_the_flights_largest_deflection():
+def test_the_nonlinear_members_are_sized_on_the_flights_largest_deflection_and_rate():
     from types import SimpleNamespace
 
     e = get_effect("actuator-dynamics")
-    d = np.linspace(-0.2, 0.2, 1001)
-    sig = SimpleNamespace(slow={"de": d})
+    t = np.arange(1001) * 0.01
+    d = 0.2 * np.sin(2 * np.pi * 0.5 * t)  # rate up to 0.2 pi rad/s
+    sig = SimpleNamespace(slow={"de": d}, dt=0.01)
     engine = SimpleNamespace(own=("X", "Z", "M"), units=[SimpleNamespace(signals=sig)])
     bound = e.bound(engine, (0,))
     sizes = {v[2] for v in bound.variants if v[0] == "saturation"}
     scale = np.percentile(np.abs(d), 99.0)
     assert sizes == {0.5 * scale, 0.75 * scale}
-    assert [v for v in bound.variants if v[0] not in ("saturation", "dead-band", "backlash")] \
-        == [v for v in e.variants if v[0] not in ("saturation", "dead-band", "backlash")]
+    rates = sorted({v[2] for v in bound.variants if v[0] == "rate-limit"})
+    fastest = np.percentile(np.abs(np.diff(d)) / 0.01, 99.0)
+    assert 0.99 * 0.2 * np.pi < fastest <= 0.2 * np.pi
+    np.testing.assert_allclose(rates, [0.2 * fastest, 0.4 * fastest, 0.7 * fastest])
+    sized = ("saturation", "dead-band", "backlash", "rate-limit")
+    assert [v for v in bound.variants if v[0] not in sized] \
+        == [v for v in e.variants if v[0] not in sized]
+    # a control that never moves: nothing to size, those members go
+    still = SimpleNamespace(own=("X", "Z", "M"), units=[SimpleNamespace(
+        signals=SimpleNamespace(slow={"de": np.zeros(100)}, dt=0.01))])
+    assert {v[0] for v in e.bound(still, (0,)).variants}.isdisjoint(sized)
