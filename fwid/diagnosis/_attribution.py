@@ -97,12 +97,22 @@ def simplest_best(costs) -> int:
     return next(k for k, c in enumerate(costs) if c <= least + TIE_RTOL * abs(least))
 
 
+def numbers_of(variant) -> int:
+    """How many numbers a member of a family is chosen with beyond its columns: a filter's
+    time constants, limits and sizes (`("rate-limit", tau, rmax)`: 2); none for a member
+    that is a set of columns (a spline's components, a modulation)."""
+    if isinstance(variant, tuple):
+        return sum(isinstance(x, (int, float)) for x in variant)
+    return 0
+
+
 def one_standard_error(errors: Sequence[np.ndarray], sizes: Sequence[int]) -> int:
     """The member a leave-one-out comparison picks by the one-standard-error rule (Breiman
     et al. 1984; Hastie, Tibshirani & Friedman, Sec. 7.10): `errors[k]` are member `k`'s
-    errors on each left-out unit, `sizes[k]` its number of columns. Of the members whose
+    errors on each left-out unit, `sizes[k]` its size (its columns and the numbers it is
+    chosen with, `numbers_of`). Of the members whose
     total error is within one standard error of the least (that of the best member's total,
-    from the spread of its units' errors), the fewest columns; among those, the least
+    from the spread of its units' errors), the smallest; among those, the least
     error (`simplest_best`). The least of many leave-one-out errors is biased low, and a
     larger member that wins by less than its own noise would fit more of it; members of one
     size are compared by their error alone."""
@@ -235,7 +245,7 @@ class Engine:
                    for v in effect.variants]
             return effect.variants[one_standard_error(
                 [sum(e / sigma2[ch] for (e, _), ch in zip(m, chans)) for m in loo],
-                [sum(k for _, k in m) for m in loo])]
+                [sum(k for _, k in m) + numbers_of(v) for m, v in zip(loo, effect.variants)])]
         costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
                      for ch in chans) for v in effect.variants]
         return effect.variants[simplest_best(costs)]

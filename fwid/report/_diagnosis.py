@@ -162,6 +162,13 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      + (f" ({c['variant']})" if c["variant"] else "")
                      + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
                      f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
+        red = (d.disturbance or {}).get("leaves_red")
+        if red:  # a later entry tracked a disturbance: say so beside the verdict
+            lines.append(f"  beside it, a disturbance: {' + '.join(red['effects'])} would cut "
+                         "more of the held-out error but leaves it about as red "
+                         f"({red['redness_after']:.1f}, from {d.disturbance['redness']:.1f}): "
+                         "it tracks what gusts or process noise did to the states, so it is "
+                         "not named")
     st = provenance_text(d.states)
     if st:
         lines.append(f"  states: {st}")

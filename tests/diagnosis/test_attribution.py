@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fwid.diagnosis._attribution import (Engine, OnLoads, acting, one_standard_error,
-                                         simplest_best, units)
+from fwid.diagnosis._attribution import (Engine, OnLoads, acting, numbers_of,
+                                         one_standard_error, simplest_best, units)
 from fwid.diagnosis._catalogue import actuator_filter, get_effect
 from fwid.diagnosis._catalogue.nonlinear_aero import columns_of
 from fwid.diagnosis._signals import Signals
@@ -148,6 +148,13 @@ def test_the_one_standard_error_rule_takes_the_fewest_columns_near_the_best():
     assert one_standard_error(errors, [1] * 5) == 3
     # nothing near the best: the best
     assert one_standard_error([best, best + 10.0], [5, 1]) == 0
+    # a member's size counts the numbers it is chosen with: a rate-limited lag within the
+    # noise of a plain one is not preferred to it
+    lag, limited = ("lag", 0.05), ("rate-limit", 0.05, 1.7)
+    assert (numbers_of(lag), numbers_of(limited), numbers_of(None)) == (1, 2, 0)
+    assert numbers_of(("saturation", 0.02, 0.1, "before")) == 2
+    assert one_standard_error([best + 0.5, best],
+                              [1 + numbers_of(lag), 1 + numbers_of(limited)]) == 0
 
 
 def test_the_member_is_the_rules_choice_on_refitted_leave_one_out_errors():
