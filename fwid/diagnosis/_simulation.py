@@ -60,17 +60,6 @@ def _diverged(ident: Identification, errors: dict) -> list[str]:
     return out
 
 
-#: When the block's output-error fits stop (`fwid.identify`'s `rtol`, `cost_rtol`): once no
-#: parameter's next step exceeds a millionth of its size and the negative log-likelihood
-#: has settled to 1e-9 of itself. The block reports RMS errors to three figures; honing the
-#: estimates to round-off (the defaults, 1e-10) took a third more Gauss-Newton steps (19 and
-#: 17 against 13 and 13 on a nonlinear-aero campaign of 8 + 8 flights, 15 against 11 for
-#: the augmented model of a raw lagging-actuator one) and moved no shrink in its seventh
-#: figure. A thousandth and a millionth stopped a slowly converging fit early: its shrink
-#: read 45 % for 65 %.
-FIT_TOL = {"rtol": 1e-6, "cost_rtol": 1e-9}
-
-
 def fit_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                  cutoff: float = 5.0) -> Identification:
     """The baseline (Eq. 7 or 8) fitted jointly on `train`, validated on `test`. It misses
@@ -79,7 +68,7 @@ def fit_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
     holds when this runs in a worker thread beside the rest of the diagnosis)."""
     with quiet_fits():
         return identify(list(train), get_model(axis), validate=list(test), joint=True,
-                        cutoff=cutoff, **FIT_TOL)
+                        cutoff=cutoff)
 
 
 def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
@@ -107,7 +96,7 @@ def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
             fitted = {k: float(v) for k, v in start.params.items() if k not in base.local}
             after = identify([prepare(f) for f in train], model.with_params(fitted),
                              validate=[prepare(f) for f in test], joint=True, cutoff=cutoff,
-                             start="model", **FIT_TOL)
+                             start="model")
     except (FitDivergedError, ExcitationError, np.linalg.LinAlgError) as exc:
         return None, (f"the model with {' + '.join(in_eom)} in the EOM could not be fitted "
                       f"and simulated ({exc}): the simulated gap is not measured"), []

@@ -134,8 +134,6 @@ def identify(
     prior=None,
     bounds=None,
     method: str = "output-error",
-    rtol: float = 1e-10,
-    cost_rtol: float = 1e-10,
 ) -> Identification:
     """Identify the cycle-averaged model from flights, as in the paper's Section IV.
 
@@ -162,9 +160,6 @@ def identify(
     - `method`: the estimator, passed to [`fwid.fit`][]: `"output-error"` (the paper's),
       `"multiple-shooting"` (an unstable vehicle) or `"filter-error"` (process noise,
       closed-loop flights).
-    - `rtol`, `cost_rtol`: when each fit stops, passed to [`fwid.fit`][] (the defaults hone
-      the estimate to round-off; `1e-4` stops once no parameter moves by more than about a
-      ten-thousandth of its own size in units of its standard deviation, far inside it).
 
     **Returns:** an [`fwid.Identification`][].
     """
@@ -186,14 +181,14 @@ def identify(
     names = [f.name for f in flights]
     if joint or len(exps) == 1:
         fits = [fit(model, exps, names=names, start=start, progress=progress, prior=prior,
-                    bounds=bounds, method=method, rtol=rtol, cost_rtol=cost_rtol)]
+                    bounds=bounds, method=method)]
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
             estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
     else:
         fits = fit_each(model, exps, names=names, start=start, progress=progress, prior=prior,
-                        bounds=bounds, method=method, rtol=rtol, cost_rtol=cost_rtol)
+                        bounds=bounds, method=method)
         summary = _mean_model(model, fits)
         estimation = [evaluate(f.model, e, n, refit_local=False)
                       for f, e, n in zip(fits, exps, names)]
