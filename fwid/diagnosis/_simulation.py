@@ -104,19 +104,18 @@ def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
 
 
 class EarlyFits:
-    """The block's output-error fits, begun before the verdict is known, one after the other
-    in one worker thread beside the selection (NumPy's; JAX releases the interpreter while it
-    computes): the baseline's at once (it does not depend on the verdict), then each
-    augmented model that `start` is given (the selection's first-round leader). One thread:
-    two fits side by side would only share the cores the selection also needs. `baseline` is
-    the baseline's future, `get(effects)` the augmented fit for `effects` (`None`: none
-    started); `simulation_gap` takes the one for the verdict's effects (the rest is left
-    unused)."""
+    """The block's output-error fits, begun before the verdict is known, in worker threads
+    beside the selection (NumPy's; JAX releases the interpreter while it computes): the
+    baseline's at once (it does not depend on the verdict), and each augmented model that
+    `start` is given (the selection's first-round leader) as soon as it is, beside the
+    baseline's. `baseline` is the baseline's future,
+    `get(effects)` the augmented fit for `effects` (`None`: none started);
+    `simulation_gap` takes the one for the verdict's effects (the rest is left unused)."""
 
     def __init__(self, train: Sequence[Flight], test: Sequence[Flight], axis: str,
                  cutoff: float):
         self.args, self.cutoff = (list(train), list(test), axis), cutoff
-        self._pool = ThreadPoolExecutor(1, thread_name_prefix="fwid-fits")
+        self._pool = ThreadPoolExecutor(2, thread_name_prefix="fwid-fits")
         self.baseline: Future = self._pool.submit(fit_baseline, *self.args, cutoff)
         self.started: dict[str, Future] = {}
 
@@ -128,7 +127,7 @@ class EarlyFits:
         return self.started.get(repr(list(effects)))
 
     def close(self) -> None:
-        """No more fits: the thread ends with the last one started."""
+        """No more fits: the threads end with the last ones started."""
         self._pool.shutdown(wait=False)
 
 
