@@ -11,7 +11,8 @@ flights' largest deflection, the rate limits fractions of their fastest deflecti
 (`bind`): a limit only shows where the flights reach it, whatever the surface, its units
 or the manoeuvre's size. The member is chosen by leave-one-flight-out error on
 the fitting flights, as `nonlinear-aero`'s size. The grids are generic (servo bandwidths of
-a few to tens of Hz, rates of a fraction to tens of rad/s), not a simulator's values.
+a few to tens of Hz; limits, play and rate limits as fractions of what the flights reach),
+not a simulator's values.
 """
 
 from __future__ import annotations
