@@ -93,18 +93,10 @@ def control_map(model, axis: str, variant_of_control):
     import jax.numpy as jnp
     import numpy as np
 
+    from ..diagnosis._lag_states import jax_lag as lag
+
     nu = len(model.inputs)
     shift = variant_of_control
-
-    def lag(u, dt, tau):
-        a = jnp.exp(-dt / tau)
-
-        def step(y, xs):
-            x0, x1 = xs
-            y = a * y + (1.0 - a) * 0.5 * (x0 + x1)
-            return y, y
-        _, ys = jax.lax.scan(step, u[0], (u[:-1], u[1:]))
-        return jnp.concatenate([u[:1], ys])
 
     def stepped(u, dt, p, kind):
         """The rate-limited or direction-dependent lag (`_catalogue.actuator_filter`)."""

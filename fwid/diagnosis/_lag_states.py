@@ -115,9 +115,9 @@ def lag_states(model: GreyBoxModel, axis: str, member: Lagging) -> GreyBoxModel:
         force_names=model.force_names, local=model.local, name=model.name + "(lag states)")
 
 
-def _lagged(x, dt: float, tau: float):
-    """`x` through the first-order lag of `_catalogue.lagged` (the same recursion, in JAX:
-    `y_k = a y_k-1 + (1 - a) (x_k + x_k-1) / 2`, started steady)."""
+def jax_lag(x, dt: float, tau: float):
+    """`x` through the first-order lag of `_catalogue._filters.lagged` (the same recursion,
+    in JAX: `y_k = a y_k-1 + (1 - a) (x_k + x_k-1) / 2`, started steady)."""
     import jax
 
     a = np.exp(-dt / tau)
@@ -144,5 +144,5 @@ def states_along(model: GreyBoxModel, y, dt: float):
         return y
     f = model.f
     qs = y @ jnp.asarray(np.asarray(f.weights))[:, :n].T
-    z = [_lagged(qs[:, j], dt, tau) for j in range(len(f.slots)) for tau in f.taus]
+    z = [jax_lag(qs[:, j], dt, tau) for j in range(len(f.slots)) for tau in f.taus]
     return jnp.concatenate([y, jnp.stack(z, axis=1)], axis=1)

@@ -7,8 +7,7 @@ import pytest
 import fwid
 from fwid.design._signals import Grid, input_3211
 from fwid.diagnosis._augment import augment
-from fwid.diagnosis._catalogue import lagging_part
-from fwid.diagnosis._catalogue.unsteady_aero import Lagging, unsteady_states
+from fwid.diagnosis._catalogue.unsteady_aero import Lagging, lagging, unsteady_states
 from fwid.diagnosis._lag_states import lag_states
 
 TAU = 0.1
@@ -31,10 +30,10 @@ def setup():
 
 
 def _lagp(model, member, y, dt):
-    """`lagging_part` (the diagnosis's filter, numpy) of each load's quasi-steady load along
-    the outputs `y`."""
-    return np.stack([lagging_part(sum(g * y[:, model.states.index(x)]
-                                      for x, g in member.derivatives[ld].items()), dt, TAU)
+    """`lagging` (the diagnosis's filter, numpy) of each load's quasi-steady load along the
+    outputs `y`."""
+    return np.stack([lagging(sum(g * y[:, model.states.index(x)]
+                                 for x, g in member.derivatives[ld].items()), dt, member)
                      for ld in "XZM"], axis=1)
 
 
@@ -92,7 +91,7 @@ def test_a_discriminating_design_drives_the_lag_terms(setup):
 
 def test_the_loads_along_a_trajectory_are_the_input_lag_models_loads(setup):
     # `states_along` + the lag-state model's force model = the input-lag model's force model
-    # fed `lagging_part` of the trajectory (numpy, the diagnosis's filter): what the loads
+    # fed `lagging` of the trajectory (numpy, the diagnosis's filter): what the loads
     # criterion of the discriminating design compares
     from fwid.diagnosis._lag_states import states_along
     from fwid.simulation._simulate import simulate_forces

@@ -22,13 +22,10 @@ from __future__ import annotations
 
 from . import (actuator_dynamics, flap_coupling, flap_frequency, lon_lat_coupling,
                nonlinear_aero, time_offset, unsteady_aero)
-from ._effect import OWN_STATES as OWN_STATES
 from ._effect import Effect as Effect
 from ._effect import axis_of as axis_of
 from ._effect import base_columns as base_columns
 from ._effect import slow_of as slow_of
-from ._filters import lagged as lagged
-from ._filters import lagging_part as lagging_part
 from .actuator_dynamics import ACTUATOR_FILTERS as ACTUATOR_FILTERS
 from .actuator_dynamics import actuator_filter as actuator_filter
 from .actuator_dynamics import filter_text as filter_text

@@ -19,11 +19,6 @@ def lagged(x: np.ndarray, dt: float, kind: str, tau: float) -> np.ndarray:
     return y
 
 
-def lagging_part(x: np.ndarray, dt: float, tau: float) -> np.ndarray:
-    """`lag(x) - x`: the part of `x` a first-order lag of `tau` holds back."""
-    return lagged(x, dt, "lag", tau) - x
-
-
 def second_order(x: np.ndarray, dt: float, fn: float, zeta: float) -> np.ndarray:
     """`y'' = wn^2 (x - y) - 2 zeta wn y'`, `wn = 2 pi fn` (bilinear transform), steady at
     the first sample."""
