@@ -146,6 +146,15 @@ class Engine:
         self._normal: dict = {}
         self._loo: dict = {}
         self._acting: dict = {}
+        self._made: dict = {}
+
+    def made(self, key, make):
+        """`make()` the first time `key` is asked for, its value after: what the families'
+        `bind` derive from the units (the spline bases both `nonlinear-aero` and
+        `flap-coupling` read, made once, so they also share one evaluation per signal)."""
+        if key not in self._made:
+            self._made[key] = make()
+        return self._made[key]
 
     def channels(self, band: str) -> list[tuple[str, str]]:
         return [(ld, band) for ld in self.loads]

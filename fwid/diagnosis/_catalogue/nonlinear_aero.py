@@ -90,14 +90,18 @@ def _columns(s: Signals, load, terms: Terms, h, dh):
 
 def smooth_bases(engine, idx) -> dict[str, Smooth | None]:
     """Each state's and control's smooth basis over the range of the units `idx` of
-    `engine` (both axes' that the flights hold)."""
-    bases = {}
-    for x in variables("lon") + variables("lat"):
-        pooled = [engine.units[i].signals.slow[x] for i in idx
-                  if x in engine.units[i].signals.slow]
-        if pooled:
-            bases[x] = smooth_basis(np.concatenate(pooled))
-    return bases
+    `engine` (both axes' that the flights hold), made once per engine and units
+    (`Engine.made`)."""
+    def make():
+        bases = {}
+        for x in variables("lon") + variables("lat"):
+            pooled = [engine.units[i].signals.slow[x] for i in idx
+                      if x in engine.units[i].signals.slow]
+            if pooled:
+                bases[x] = smooth_basis(np.concatenate(pooled))
+        return bases
+
+    return engine.made(("smooth_bases", tuple(idx)), make)
 
 
 def _bind(effect: Effect, engine, idx) -> Effect:
