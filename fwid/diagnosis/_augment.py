@@ -44,7 +44,7 @@ from ..identification import get_model
 from ..models import GreyBoxModel
 from ._catalogue import actuator_filter, filter_text, frequency_deviation
 from ._catalogue.nonlinear_aero import Terms
-from ._catalogue.unsteady_aero import Lagging, lagging, quasi_steady, unsteady_states
+from ._catalogue.unsteady_aero import Lagging, lagging, quasi_steady
 from ._probes import ATTITUDE, elapsed
 from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, cycle_averaged, other
 
@@ -138,6 +138,23 @@ def prepared_inputs(axis: str, effects: Sequence[tuple[str, object]]) -> dict[st
     return out
 
 
+def _lag_inputs(flight: Flight, axis: str, member: Lagging, cutoff: float
+                ) -> dict[str, np.ndarray]:
+    """`unsteady-aero`'s prepared inputs `{load}_lag`: each load's quasi-steady load (its
+    derivatives on the cycle-averaged states, one decomposition of the flight) through the
+    member's filter, lagging part only."""
+    slow = cycle_averaged(flight, AXIS_STATES[axis], cutoff)
+    return {f"{ld}_lag": lagging(quasi_steady(slow, ld, member, flight.n), flight.dt, member)
+            for ld in AXIS_LOADS[axis]}
+
+
+def _frequency_inputs(flight: Flight, tau: float) -> dict[str, np.ndarray]:
+    """`flap-frequency`'s prepared inputs: `f` less its median (through the lag `tau`) and
+    its square."""
+    df = frequency_deviation(np.asarray(flight["f"], dtype=float), flight.dt, tau)
+    return {"f_dev": df, "f_dev2": df ** 2}
+
+
 def _smooth_terms(axis: str, member: Terms, state_index: dict):
     """`nonlinear-aero`'s terms (`_term`) for `member`: per state its smooth components in
     the simulated state, and the products of every two."""
@@ -177,6 +194,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     terms: list[tuple] = []  # (suffix, kind, indices, loads, basis) (`Augmented`)
     left_out = []
     columns: dict[str, Callable[[Flight], np.ndarray]] = {}  # prepared extra inputs
+    groups: list[Callable[[Flight], dict[str, np.ndarray]]] = []  # several made together
 
     def add_input(name, column, on=(), suffix=None):
         j = len(extra_inputs)
@@ -194,15 +212,12 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
                 left_out.append(name)
                 continue
             for ld in loads:
-                add_input(f"{ld}_lag", lambda fl, ld=ld, m=variant: lagging(quasi_steady(
-                    cycle_averaged(fl, unsteady_states(ld), cutoff), ld, m, fl.n), fl.dt, m),
-                          on=(ld,), suffix="_lag")
+                add_input(f"{ld}_lag", None, on=(ld,), suffix="_lag")
+            groups.append(lambda fl, m=variant: _lag_inputs(fl, axis, m, cutoff))
         elif name == "flap-frequency":
-            tau = float(variant or 0.0)
-            add_input("f_dev", lambda fl, tau=tau: frequency_deviation(
-                np.asarray(fl["f"], dtype=float), fl.dt, tau))
-            add_input("f_dev2", lambda fl, tau=tau: frequency_deviation(
-                np.asarray(fl["f"], dtype=float), fl.dt, tau) ** 2)
+            add_input("f_dev", None)
+            add_input("f_dev2", None)
+            groups.append(lambda fl, tau=float(variant or 0.0): _frequency_inputs(fl, tau))
         elif name == "lon-lat-coupling":
             o = other(axis)
             for s in AXIS_STATES[o] + (AXIS_INPUT[o],):
@@ -235,6 +250,8 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
 
     def prepare(flight: Flight) -> Flight:
         new = {k: g(flight) for k, g in columns.items()}
+        for g in groups:
+            new.update(g(flight))
         if shift is not None:
             slow = cycle_averaged(flight, (ctrl,), cutoff)[ctrl]
             new[control] = actuator_filter(slow, flight.dt, shift)
