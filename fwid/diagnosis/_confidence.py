@@ -5,10 +5,10 @@ pairs of the catalogue entries that gain most alone (`PAIR_POOL`; ordered by tha
 the effects the forward selection chose together, up to its first probe (an entry after a
 probe only echoes it). Every entry is a family whose size was chosen inside the fitting
 flights, so each pairs with every other on the same terms. The best explanation gives the
-verdict (its first effect). Each is scored, as the selection's evidence is (`_significance.py`), by the
-cross-fit: on every scoring block of about a second, the model fitted on the other flights
-gives, per band, the held-out sum of squares pooled over the loads (each scaled by the
-baseline's training mean square `s_l`), and the block's loss is
+verdict (its first effect). Each is scored, as the selection's evidence is
+(`_significance.py`), by the cross-fit: on every scoring block of about a second, the model
+fitted on the other flights gives, per band, the held-out sum of squares pooled over the
+loads (each scaled by the baseline's training mean square `s_l`), and the block's loss is
 
     L_j(m) = sum_band log( sum_l SSE_j,l,band(m) / s_l ),
 

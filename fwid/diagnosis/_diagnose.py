@@ -177,9 +177,9 @@ def diagnose(
     `verdict` is the first effect of the confidence set's best explanation (least held-out
     loss, each effect charged its smallest gain; `effects` are its catalogue effects, a probe
     first makes it `"unexplained"`; the selection's own model when they agree), then the
-    colour rules above: `"unexplained"`, `"random-disturbance"`, or `"none"`. Each candidate carries its p value,
-    a `confidence` (one minus the p value corrected over the candidates in play) and the
-    detection limit: the held-out error reduction the test would have seen with 80 % power.
+    colour rules above: `"unexplained"`, `"random-disturbance"`, or `"none"`. Each
+    candidate carries its p value, a `confidence` (one minus the p value corrected over the
+    candidates in play) and the detection limit: the held-out error reduction the test would have seen with 80 % power.
 
     **Arguments:** `train`, `test` (flights), `axis` (`"lon"`/`"lat"`, the manoeuvre's axis),
     `catalogue`, `probes` (rivals outside the catalogue; `()` for none), `cutoff` (the split
@@ -335,7 +335,8 @@ def verdict_of(effects: list[dict], unexplained: dict | None, disturbance: dict)
     (`disturbance["leaves_red"]`, catalogue entries; for a probe, `unexplained`): a
     disturbance drives the states, so functions of them predict part of it (its proxy), but
     what is left stays as red, where a deterministic effect, once fitted, leaves the noise.
-    The same adequacy test for every explanation; `"none"` when white."""
+    The same adequacy test (`whitens`) for every explanation built on the states' dynamics,
+    probe or catalogue entry (`untracked`); `"none"` when white."""
     if effects:
         return effects[0]["effect"]
     if unexplained is not None and whitens(disturbance["redness"],

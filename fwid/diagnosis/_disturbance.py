@@ -72,6 +72,7 @@ def whitens(before: float, after: float) -> bool:
     (`after < RED_MIN`), or when it cuts the redness by the same factor at least (a
     deterministic effect, once fitted, takes the low-frequency power it put there; a proxy
     of a disturbance, a function of the states the disturbance drove, leaves the residual
-    about as red as before). The one adequacy test of every explanation, catalogue entry or
-    probe."""
+    about as red as before). The adequacy test of every explanation built on the states'
+    dynamics: a probe, or a catalogue entry that filters the states (`Effect.filters_states`);
+    a disturbance drives the states, so only those can track one."""
     return after < RED_MIN or after * RED_MIN <= before
