@@ -93,6 +93,11 @@ def _manoeuvre_text(tm: dict) -> str:
     return f"{ratio:.1f}x as large in the manoeuvres as in steady flight"
 
 
+def _as_red(after: float, disturbance: dict) -> str:
+    """How red an explanation left the baseline's held-out residual, beside how red it was."""
+    return f"about as red ({after:.1f}, from {disturbance['redness']:.1f})"
+
+
 def diagnosis_summary(d: Diagnosis) -> str:
     """A summary a person reads in ten seconds: the verdict, where the gap is, the shrink."""
     loc = d.localisation
@@ -123,13 +128,13 @@ def diagnosis_summary(d: Diagnosis) -> str:
         u, red = d.unexplained, dist.get("leaves_red")
         if red:
             names = " + ".join(red["effects"])
-            why = (f"{names} predicts part of the held-out error but leaves it about as red "
-                   f"({red['redness_after']:.1f}, from {dist['redness']:.1f}): it tracks what "
-                   "the disturbance did to the states, so it is not named")
+            why = (f"{names} predicts part of the held-out error but leaves it "
+                   f"{_as_red(red['redness_after'], dist)}: it tracks what the disturbance did "
+                   "to the states, so it is not named")
         elif u:
             why = (f"the {u['probe']} probe was selected (p = {u['p']:.2g}) but leaves it "
-                   f"about as red ({u['redness_after']:.1f}, from {dist['redness']:.1f}): it "
-                   "tracks what the disturbance did; no catalogue effect explains it")
+                   f"{_as_red(u['redness_after'], dist)}: it tracks what the disturbance did; "
+                   "no catalogue effect explains it")
         else:
             why = "no catalogue effect or probe explains the held-out error"
         lines.append(f"  VERDICT: random-disturbance: {why}; the error is red (low/high-"
@@ -165,10 +170,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
         red = (d.disturbance or {}).get("leaves_red")
         if red:  # a later entry tracked a disturbance: say so beside the verdict
             lines.append(f"  beside it, a disturbance: {' + '.join(red['effects'])} would cut "
-                         "more of the held-out error but leaves it about as red "
-                         f"({red['redness_after']:.1f}, from {d.disturbance['redness']:.1f}): "
-                         "it tracks what gusts or process noise did to the states, so it is "
-                         "not named")
+                         "more of the held-out error but leaves it "
+                         f"{_as_red(red['redness_after'], d.disturbance)}: it tracks what gusts "
+                         "or process noise did to the states, so it is not named")
     st = provenance_text(d.states)
     if st:
         lines.append(f"  states: {st}")
