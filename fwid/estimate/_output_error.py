@@ -28,6 +28,7 @@ from ._problem import (
     flight_params,
     free_layout,
     merge_batch,
+    flight_columns,
     prepare,
 )
 from ._stability import instability_warning
@@ -58,30 +59,31 @@ def raw_residuals(model, params, batch):
     return (batch.z - y) * batch.mask[..., None]
 
 
-def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, prior: PriorBounds | None = None,
-               *, diagonal, max_passes, max_steps, rtol, cost_rtol, n_local_batch=0):
-    """The whole estimator on one (padded) batch of experiments that share the parameters.
-
-    Pure and jit/vmap-able: one `optimistix.least_squares` solve with [`RelaxedGaussNewton`][]
-    (R relaxed by Eq. 11 at every Gauss-Newton step, the step halved on the likelihood of
-    Eq. 10). Each step's residuals and their Jacobian come from one RK4 solve of the
-    state with its forward sensitivities ([`simulate_sensitivities`][], equal to
-    `jax.jacfwd` through the RK4 simulation), handed to optimistix as the derivative of the
-    residual function ([`jacobian_once`][]). The uncertainty is computed from the Jacobian
-    at the estimate that the last step already holds. `max_passes` is unused (kept for the
-    signature: every step is a relaxation pass). `prior`: a prior and bounds
-    ([`PriorBounds`][]): the prior's residuals join the cost, the step and the information
-    matrix (`M = M_data + diag(1/std^2)`), the bounds make the step the bounded-variable one
-    and the parameters held at an active bound leave the covariance (`covariance_held`).
-    """
-    del max_passes
-    noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
+def residuals_with_jacobian(model: GreyBoxModel, batch: Experiment, n_local_batch: int = 0):
+    """The function `theta -> (residuals, d residuals / d theta)` of a (padded) batch of
+    experiments, `(B, n, ny)` and `(B, n, ny, p)`, masked, from one RK4 solve per experiment
+    of its state and forward sensitivities ([`simulate_sensitivities`][]). In a joint fit
+    (`n_local_batch` flights, each with its own local parameters) each flight's sensitivities
+    are integrated for the global parameters and its own locals only (`flight_columns`): its
+    row of the Jacobian is zero for the other flights' locals, so the cost does not grow with
+    the number of flights squared."""
 
     def residuals_and_jacobian(theta):
         def one(e, b):
-            def params_of(th):  # flight b's parameters (its own local ones in joint fits)
-                return flight_params(merge_batch(model, th, n_local_batch), b)
-            return simulate_sensitivities(model, e, params_of, theta)
+            if n_local_batch == 0:
+                def params_of(th):
+                    return flight_params(merge_batch(model, th, 0), b)
+                return simulate_sensitivities(model, e, params_of, theta)
+            # flight b depends on the global parameters and its own locals only: its
+            # sensitivities are integrated for those, the rest of its row is zero
+            own = flight_columns(model, n_local_batch, b)
+
+            def params_of(th_own):
+                return flight_params(merge_batch(model, theta.at[own].set(th_own),
+                                                 n_local_batch), b)
+            ys, dys_own = simulate_sensitivities(model, e, params_of, theta[own])
+            full = jnp.zeros(dys_own.shape[:-1] + theta.shape, dys_own.dtype)
+            return ys, full.at[..., own].set(dys_own)
 
         B = batch.t.shape[0]
         if B == 1:  # no vmap: a batched solver loop selects on its whole state every step
@@ -91,6 +93,31 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, prior: PriorBound
             ys, dys = jax.vmap(one)(batch, jnp.arange(B))
         m = batch.mask[..., None]
         return (batch.z - ys) * m, -dys * m[..., None]
+
+    return residuals_and_jacobian
+
+
+def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, prior: PriorBounds | None = None,
+               *, diagonal, max_passes, max_steps, rtol, cost_rtol, n_local_batch=0):
+    """The whole estimator on one (padded) batch of experiments that share the parameters.
+
+    Pure and jit/vmap-able: one `optimistix.least_squares` solve with [`RelaxedGaussNewton`][]
+    (R relaxed by Eq. 11 at every Gauss-Newton step, the step halved on the likelihood of
+    Eq. 10). Each step's residuals and their Jacobian come from one RK4 solve of the
+    state with its forward sensitivities ([`simulate_sensitivities`][], equal to
+    `jax.jacfwd` through the RK4 simulation), handed to optimistix as the derivative of the
+    residual function ([`jacobian_once`][]; [`residuals_with_jacobian`][]). The uncertainty
+    is computed from the Jacobian at the estimate that the last step already holds.
+    `max_passes` is unused (kept for the signature: every step is a relaxation pass).
+    `prior`: a prior and bounds ([`PriorBounds`][]): the prior's residuals join the cost,
+    the step and the information matrix (`M = M_data + diag(1/std^2)`), the bounds make the
+    step the bounded-variable one and the parameters held at an active bound leave the
+    covariance (`covariance_held`).
+    """
+    del max_passes
+    noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
+
+    residuals_and_jacobian = residuals_with_jacobian(model, batch, n_local_batch)
 
     sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
                         max_steps=max_steps, prior=prior)

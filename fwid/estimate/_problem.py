@@ -164,6 +164,14 @@ def merge_batch(model: GreyBoxModel, theta, n_local_batch: int):
     return params
 
 
+def flight_columns(model: GreyBoxModel, n_local_batch: int, b):
+    """The entries of the free vector (`free_layout`) that flight `b`'s simulation depends
+    on: every global parameter, then its own value of each local one (`b` may be traced)."""
+    glob, loc, _ = free_layout(model, n_local_batch)
+    return jnp.concatenate([jnp.arange(len(glob)),
+                            len(glob) + jnp.arange(len(loc)) * n_local_batch + b])
+
+
 def flight_params(merged: dict, b) -> dict:
     """Flight `b`'s parameters from [`merge_batch`][]'s dict (a local parameter is an array
     with one value per flight, a global one a scalar)."""

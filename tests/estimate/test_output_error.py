@@ -246,3 +246,45 @@ def test_fit_each_identical_to_fitting_each_flight_alone(lon_flight):
         a = fit(longitudinal(), e)
         np.testing.assert_allclose(np.asarray(b.theta), np.asarray(a.theta), rtol=1e-9, atol=0)
         assert int(b.steps) == int(a.steps) and bool(b.converged)
+
+
+def test_a_joint_fits_jacobian_equals_jacfwd_through_the_simulation():
+    """Each flight's sensitivities are integrated for the global parameters and its own
+    local ones only; the full Jacobian (zero for the other flights' locals) equals
+    `jax.jacfwd` of the residuals of the whole batch."""
+    import jax
+    import jax.numpy as jnp
+
+    from fwid.estimate._output_error import raw_residuals, residuals_with_jacobian
+    from fwid.estimate._problem import free_layout, merge_batch
+    from fwid.models import TABLE1, longitudinal
+    from fwid.simulation import Experiment
+    from fwid.simulation._experiment import stack_experiments
+
+    from .conftest import LON_CONSTS
+
+    model = longitudinal(dict(TABLE1, bq=0.01, bu=-0.003, bw=0.002, btheta=0.001))
+    rng = np.random.default_rng(3)
+    exps = []
+    for k in range(3):
+        t = np.arange(0, 2 + 0.5 * k, 0.01)
+        u = (0.05 * np.sin(2 * np.pi * (0.7 + 0.3 * k) * t))[:, None]
+        exps.append(Experiment(t, u, 0.01 * rng.standard_normal((len(t), 4)),
+                               x0=0.01 * rng.standard_normal(4), consts=LON_CONSTS))
+    batch = stack_experiments(exps)
+    B = len(exps)
+    glob, loc, names = free_layout(model, B)
+    assert loc, "the model needs local (bias) parameters for a joint fit"
+    values = [float(model.params[k]) for k in glob] + [
+        float(model.params[k]) + 0.01 * b for k in loc for b in range(B)]
+    theta = jnp.asarray(values) * (1.0 + 0.05 * rng.standard_normal(len(names)))
+    r, J = residuals_with_jacobian(model, batch, B)(theta)
+    r_ref = raw_residuals(model, merge_batch(model, theta, B), batch)
+    J_ref = jax.jacfwd(lambda th: raw_residuals(model, merge_batch(model, th, B), batch))(theta)
+    np.testing.assert_allclose(r, r_ref, atol=1e-12)
+    np.testing.assert_allclose(J, J_ref, rtol=1e-8, atol=1e-10)
+    # flight 0's row is zero for flight 1's bias terms, and not for its own
+    own1 = [names.index(f"{k}@1") for k in loc]
+    own0 = [names.index(f"{k}@0") for k in loc]
+    assert np.all(np.asarray(J)[0][..., own1] == 0.0)
+    assert np.any(np.asarray(J)[0][..., own0] != 0.0)
