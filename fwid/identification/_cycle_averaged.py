@@ -134,6 +134,7 @@ def identify(
     prior=None,
     bounds=None,
     method: str = "output-error",
+    noise: str = "auto",
 ) -> Identification:
     """Identify the cycle-averaged model from flights, as in the paper's Section IV.
 
@@ -160,6 +161,9 @@ def identify(
     - `method`: the estimator, passed to [`fwid.fit`][]: `"output-error"` (the paper's),
       `"multiple-shooting"` (an unstable vehicle) or `"filter-error"` (process noise,
       closed-loop flights).
+    - `noise`: the measurement-noise covariance R, passed to [`fwid.fit`][]: `"auto"` (a
+      full R, or a diagonal one where the full one fails or the residuals carry model
+      error), `"full"` or `"diagonal"`.
 
     **Returns:** an [`fwid.Identification`][].
     """
@@ -181,14 +185,14 @@ def identify(
     names = [f.name for f in flights]
     if joint or len(exps) == 1:
         fits = [fit(model, exps, names=names, start=start, progress=progress, prior=prior,
-                    bounds=bounds, method=method)]
+                    bounds=bounds, method=method, noise=noise)]
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
             estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
     else:
         fits = fit_each(model, exps, names=names, start=start, progress=progress, prior=prior,
-                        bounds=bounds, method=method)
+                        bounds=bounds, method=method, noise=noise)
         summary = _mean_model(model, fits)
         estimation = [evaluate(f.model, e, n, refit_local=False)
                       for f, e, n in zip(fits, exps, names)]
