@@ -81,12 +81,9 @@ BENCHMARKS = (
      "development and a held-out half.",
      {
         "diagnosis_power_heldout":
-            "the held-out half, seeds 1 and 3: coverage, decisiveness, false alarms, pairs",
+            "the held-out half, the latest fresh draw of its seeds (the seeds are in its "
+            "command): coverage, decisiveness, false alarms, pairs, the SINDy peer beside fwid",
         "diagnosis_power_dev": "the development half, on which the settings were chosen",
-        "diagnosis_family_actuator_heldout":
-            "`actuator-dynamics` as a family of filters, held-out forms",
-        "diagnosis_family_quiet_heldout":
-            "clean and out-of-catalogue cases with the family of filters",
         "diagnosis": "the first withheld-effect benchmark: gap closure per effect",
     }),
     ("Diagnosis: peers", "`fwid diagnose` beside a SINDy peer on the same flights.", {
