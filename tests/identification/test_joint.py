@@ -195,3 +195,15 @@ def test_spread_with_joint_and_validate_printed(joint):
     spread = report["joint_vs_individual"]["modes"]["individual_spread"]
     _check(_rows(report["_terminal"], "mode spread over the 3 training flights, each fitted "
                  "alone"), spread)
+
+
+def test_identify_passes_the_noise_model_to_every_fit(folder):
+    """`noise` reaches `fwid.fit` in both forms of `identify`: the fits report the R they
+    were made with."""
+    flights = fwid.load_flights(*[folder / f"lon_{i}.csv" for i in range(3)])
+    joint = fwid.identify(flights, "lon", joint=True, noise="diagonal")
+    each = fwid.identify(flights, "lon", noise="full")
+    assert [f.noise for f in joint.fits] == ["diagonal"]
+    assert [f.noise for f in each.fits] == ["full"] * 3
+    with pytest.raises(ValueError, match="noise must be one of"):
+        fwid.identify(flights, "lon", noise="white")
