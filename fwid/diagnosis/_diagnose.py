@@ -179,7 +179,8 @@ def diagnose(
     first makes it `"unexplained"`; the selection's own model when they agree), then the
     colour rules above: `"unexplained"`, `"random-disturbance"`, or `"none"`. Each
     candidate carries its p value, a `confidence` (one minus the p value corrected over the
-    candidates in play) and the detection limit: the held-out error reduction the test would have seen with 80 % power.
+    candidates in play) and the detection limit: the held-out error reduction the test
+    would have seen with 80 % power.
 
     **Arguments:** `train`, `test` (flights), `axis` (`"lon"`/`"lat"`, the manoeuvre's axis),
     `catalogue`, `probes` (rivals outside the catalogue; `()` for none), `cutoff` (the split

@@ -25,10 +25,10 @@ from ._prior import PriorBounds, has_any, prior_bounds
 from ._problem import (
     FitResult,
     check_information,
+    flight_columns,
     flight_params,
     free_layout,
     merge_batch,
-    flight_columns,
     prepare,
 )
 from ._stability import instability_warning

@@ -45,13 +45,14 @@ class Smooth:
     def at(self, x: np.ndarray) -> np.ndarray:
         """`self(x)` for a signal array that is evaluated again and again (a flight's
         cycle-averaged state, once per member and load that reads it): kept while `x`
-        lives, so every member slices the one evaluation."""
+        lives, so every member slices the one evaluation, and dropped when it goes."""
         key = id(x)
         held = self._memo.get(key)
         if held is not None and held[0]() is x:
             return held[1]
         value = self(x)
-        self._memo[key] = (weakref.ref(x), value)
+        memo = self._memo
+        self._memo[key] = (weakref.ref(x, lambda _, k=key: memo.pop(k, None)), value)
         return value
 
     def __call__(self, x, xp=np):

@@ -134,8 +134,8 @@ def _bind(effect: Effect, engine, idx) -> Effect:
     d = [np.abs(s.slow[AXIS_INPUT[axis]]) for s in units]
     rates = [np.abs(np.diff(s.slow[AXIS_INPUT[axis]])) / s.dt for s in units
              if len(s.slow[AXIS_INPUT[axis]]) > 1]
-    scale = {kind: float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
-             for kind in NONLINEAR}
+    largest = float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
+    scale = dict.fromkeys(NONLINEAR, largest)
     scale["rate-limit"] = float(np.percentile(np.concatenate(rates), 99.0)) if rates else 0.0
     out = []
     for v in effect.variants:

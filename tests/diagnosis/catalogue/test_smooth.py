@@ -51,3 +51,16 @@ def test_outside_the_range_it_holds_the_end_values_and_reads_back():
 @pytest.mark.parametrize("x", [np.zeros(500), np.ones(10)])
 def test_a_signal_that_does_not_move_has_no_components(x):
     assert smooth_basis(x) is None
+
+
+def test_at_evaluates_a_signal_once_while_it_lives_and_forgets_it_after():
+    basis = smooth_basis(np.linspace(-1.0, 1.0, 400))
+    x = np.linspace(-0.5, 0.5, 50)
+    first = basis.at(x)
+    np.testing.assert_array_equal(first, basis(x))
+    assert basis.at(x) is first  # the one evaluation, kept
+    y = x.copy()  # equal values, another signal: evaluated on its own
+    assert basis.at(y) is not first
+    assert len(basis._memo) == 2
+    del x, first, y
+    assert basis._memo == {}  # nothing kept for signals that are gone
