@@ -119,12 +119,15 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: one overview of all flights' fits (the worst and best few "
                    "when many) and the poles (summary), plus one figure per flight (all), or "
                    "none; flap/combined: their figures (summary, all) or none")
-    i.add_argument("--method", choices=("output-error", "multiple-shooting", "filter-error"),
+    i.add_argument("--method", choices=("output-error", "multiple-shooting", "filter-error",
+                                        "equation-error"),
                    default="output-error",
                    help="lon/lat: the estimator: output error (the paper's), multiple shooting "
                    "(an unstable vehicle: the simulation restarts from the measured states "
-                   "every few samples) or filter error (process noise, closed-loop flights: "
-                   "a Kalman filter in the likelihood)")
+                   "every few samples), filter error (process noise, closed-loop flights: "
+                   "a Kalman filter in the likelihood) or equation error (least squares of "
+                   "the reconstructed loads on the measured states: no simulation, the start "
+                   "for an unstable vehicle flown in closed loop)")
     i.add_argument("--prior", default=None, metavar="PRIOR.json",
                    help="lon/lat: a Gaussian prior on parameters, {\"Mq\": {\"mean\": .., "
                    "\"std\": ..}, ..}, or an earlier report.json (its parameters and std): "

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from .._errors import InputError
 from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment, with_measured_x0
+from ._equation_error import fit_equation_error
 from ._filter_error import fit_filter_error
 from ._noise import check_noise
 from ._output_error import fit_output_error
@@ -14,7 +15,7 @@ from ._problem import FitResult
 from ._shooting import fit_shooting
 
 #: The estimation methods [`fwid.fit`][] and [`fwid.fit_each`][] take with `method=`.
-METHODS = ("output-error", "multiple-shooting", "filter-error")
+METHODS = ("output-error", "multiple-shooting", "filter-error", "equation-error")
 
 
 def fit(
@@ -69,7 +70,9 @@ def fit(
     - `method`: `"output-error"` (the above); `"multiple-shooting"` for unstable vehicles
       ([`fwid.fit_shooting`][]; option `segments` per experiment, default segments of 10
       samples and at least 0.5 s); `"filter-error"` for data with process noise
-      ([`fwid.fit_filter_error`][]).
+      ([`fwid.fit_filter_error`][]); `"equation-error"`: least squares of the reconstructed
+      loads on the states and inputs, no simulation (`fwid.estimate._equation_error`: the
+      start of the others, and where an unstable vehicle flown in closed loop is begun).
     - `prior`: a Gaussian prior on parameters, `{name: (mean, std)}` (or
       `{name: {"mean": .., "std": ..}}`, a [`fwid.FitResult`][], an identification, a
       `report.json` dict or file: see [`fwid.prior_from`][], which also scales it). Each
@@ -114,6 +117,9 @@ def fit(
                          f"not method={method!r}; drop them or fit by output error")
     if method == "multiple-shooting":
         return fit_shooting(model, exps, **common, **options)
+    if method == "equation-error":
+        return fit_equation_error(model, exps, local_per_flight=local_per_flight, **common,
+                                  **options)
     if method == "filter-error":
         if local_per_flight is not None:
             options = {**options, "local_per_flight": local_per_flight}

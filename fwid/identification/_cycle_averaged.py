@@ -159,8 +159,10 @@ def identify(
     - `prior`, `bounds`: a Gaussian prior on parameters and bounds, passed to
       [`fwid.fit`][] (with per-flight fits, every flight's fit gets them).
     - `method`: the estimator, passed to [`fwid.fit`][]: `"output-error"` (the paper's),
-      `"multiple-shooting"` (an unstable vehicle) or `"filter-error"` (process noise,
-      closed-loop flights).
+      `"multiple-shooting"` (an unstable vehicle), `"filter-error"` (process noise,
+      closed-loop flights) or `"equation-error"` (least squares of the reconstructed loads:
+      no simulation, where an unstable vehicle flown in closed loop is begun; its loads
+      metrics are those predicted at the measured states).
     - `noise`: the measurement-noise covariance R, passed to [`fwid.fit`][]: `"auto"` (a
       full R, or a diagonal one where the full one fails or the residuals carry model
       error), `"full"` or `"diagonal"`.
@@ -189,15 +191,16 @@ def identify(
         summary = fits[0].model
         estimation = []
         for i, (e, n) in enumerate(zip(exps, names)):
-            estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False))
+            estimation.append(evaluate(fits[0].flight_model(i), e, n, refit_local=False,
+                                       method=method))
     else:
         fits = fit_each(model, exps, names=names, start=start, progress=progress, prior=prior,
                         bounds=bounds, method=method, noise=noise)
         summary = _mean_model(model, fits)
-        estimation = [evaluate(f.model, e, n, refit_local=False)
+        estimation = [evaluate(f.model, e, n, refit_local=False, method=method)
                       for f, e, n in zip(fits, exps, names)]
     validation = [
-        evaluate(summary, averaged(f, model, cutoff, noise_cutoff), f.name)
+        evaluate(summary, averaged(f, model, cutoff, noise_cutoff), f.name, method=method)
         for f in validate
     ]
     consts = {k: float(v) for k, v in exps[0].consts.items()}

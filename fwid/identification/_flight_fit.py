@@ -9,8 +9,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import FitDivergedError
+from ..estimate._equation_error import equation_error_locals, loads_at_measured_states
 from ..estimate._local import refit_local_affine
 from ..estimate._fit import fit
+from ..estimate._stability import GROWTH_MAX, fastest_growth
 from ..models._greybox import GreyBoxModel
 from ..simulation._buckets import pad_experiment
 from ..simulation._experiment import Experiment
@@ -82,14 +84,32 @@ def flight_fit(
     )
 
 
+def _grows(model: GreyBoxModel, exp: Experiment) -> bool:
+    """Whether the model's open-loop simulation grows beyond `GROWTH_MAX`-fold over the
+    flight (an unstable model: its simulation cannot re-estimate the biases) and its states
+    are measured (so that equation error can)."""
+    if not (model.outputs_are_states or model.measured_states is not None):
+        return False  # (equation error needs the states measured)
+    T = float(exp.t[-1] - exp.t[0])
+    return fastest_growth(model, exp) * T > float(np.log(GROWTH_MAX))
+
+
 def evaluate(
-    model: GreyBoxModel, exp: Experiment, name: str, *, refit_local: bool = True
+    model: GreyBoxModel, exp: Experiment, name: str, *, refit_local: bool = True,
+    method: str = "output-error",
 ) -> FlightFit:
     """Simulate `model` on one experiment and score it against the measurements.
 
     With `refit_local`, the model's flight-specific parameters (the bias terms) are first
     re-estimated on this flight, everything else held at its value: a validation flight has
-    its own trim errors, which the biases exist to absorb.
+    its own trim errors, which the biases exist to absorb. They are re-estimated by the
+    maximum likelihood of the simulated outputs, or, with `method="equation-error"` and for
+    a model whose simulation grows beyond a hundredfold over the flight (which no bias could
+    keep near the data), by equation error at the measured states.
+
+    With `method="equation-error"` the loads are those the model predicts at the measured
+    states (the equation-error prediction, with the flight's own load offsets); otherwise
+    those along the simulated states.
 
     **Arguments:**
 
@@ -97,30 +117,37 @@ def evaluate(
     - `exp`: the [`fwid.Experiment`][] of the flight.
     - `name`: the flight's name.
     - `refit_local`: re-estimate the bias terms on this flight first (default `True`).
+    - `method`: the estimator the model came from ([`fwid.fit`][]'s `method`).
 
     **Returns:** a [`fwid.FlightFit`][].
     """
-    local = {}
     n = exp.n
     padded = pad_experiment(exp)  # one of a few lengths: a new length rarely compiles
     if refit_local and model.local:
-        # bias terms enter affinely: a weighted linear solve (no second estimator to compile);
-        # the full ML fit of the biases otherwise
-        try:
-            local = refit_local_affine(model, padded)
-        except FitDivergedError as exc:
-            raise FitDivergedError(f"{name}: {exc} (an unstable model, or a term that grows "
-                                   "without bound)") from exc
-        if local is None:
-            r = fit(model.with_free(model.local), exp, names=[name], start="model")
-            local = {k: float(r.model.params[k]) for k in model.local}
+        if method == "equation-error" or _grows(model, exp):
+            local = equation_error_locals(model, exp, name)
+        else:
+            # bias terms enter affinely: a weighted linear solve (no second estimator to
+            # compile); the full ML fit of the biases otherwise
+            try:
+                local = refit_local_affine(model, padded)
+            except FitDivergedError as exc:
+                raise FitDivergedError(f"{name}: {exc} (an unstable model, or a term that "
+                                       "grows without bound)") from exc
+            if local is None:
+                r = fit(model.with_free(model.local), exp, names=[name], start="model")
+                local = {k: float(r.model.params[k]) for k in model.local}
         model = model.with_params(local)
-    xs, ys = simulate(model, padded)  # the padding, simulated after the end, is cut off
+    local = {k: float(model.params[k]) for k in model.local}
+    with np.errstate(over="ignore", invalid="ignore"):
+        xs, ys = simulate(model, padded)  # the padding, simulated after the end, is cut off
     forces = model.forces is not None and exp.forces is not None
+    if forces:
+        loads = (loads_at_measured_states(model, exp) if method == "equation-error"
+                 else simulate_forces(model, xs, padded)[:n])
     return flight_fit(
         name, exp.t, {k: np.asarray(exp.u[:, j]) for j, k in enumerate(model.inputs)},
         model.outputs, exp.z, ys[:n], force_names=model.force_names if forces else (),
         forces_measured=exp.forces if forces else None,
-        forces_simulated=simulate_forces(model, xs, padded)[:n] if forces else None,
-        local=local,
+        forces_simulated=loads if forces else None, local=local,
     )
