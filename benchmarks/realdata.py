@@ -75,7 +75,7 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         proc = subprocess.run([sys.executable, "-m", "fwid.cli", "reconstruct", str(raw),
                                "--map", str(MAP), "--out", str(Path(tmp) / "out"),
-                               "--no-figures", "--quiet", "--max-dropout", "1.0"],
+                               "--no-figures", "--quiet", "--max-dropout", "1.0", "--keep-ground"],
                               capture_output=True, text=True, cwd=ROOT)
         t_fwid = time.perf_counter() - t0
         if proc.returncode != 0:

@@ -7,13 +7,15 @@ import sys
 import time
 from pathlib import Path
 
-from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets
+from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets, window_of
 
 
 def diagnose(args) -> int:
     t0 = time.perf_counter()
+    window = window_of(args)
     check_paths(args.train, args.test)
-    train, test = read_sets(args.train, args.test, require=DIAGNOSE_COLUMNS[args.axis])
+    train, test = read_sets(args.train, args.test, require=DIAGNOSE_COLUMNS[args.axis],
+                            window=window)
     import fwid  # JAX from here on: every file has been read and checked
     from fwid.report import diagnosis_summary, write_diagnosis
 
@@ -31,7 +33,8 @@ def diagnose(args) -> int:
     # `fwid design --discriminate`, which fits the two closest effects' models again
     diag.settings = {**diag.settings,
                      "train_paths": [str(Path(r.path).resolve()) for r in train_records],
-                     "test_paths": [str(Path(r.path).resolve()) for r in test_records]}
+                     "test_paths": [str(Path(r.path).resolve()) for r in test_records],
+                     **({} if window is None else {"window": list(window)})}
     print(diagnosis_summary(diag))
     if args.out:
         out = Path(args.out)

@@ -266,7 +266,9 @@ def discriminate(args) -> int:
     from ._inputs import DIAGNOSE_COLUMNS, check_paths, read_sets
 
     check_paths(train)
-    (records,) = read_sets(train, require=DIAGNOSE_COLUMNS[axis][:5], vehicle_for=axis)
+    window = diag.get("method", {}).get("window")  # the diagnosis's --window, if any
+    (records,) = read_sets(train, require=DIAGNOSE_COLUMNS[axis][:5], vehicle_for=axis,
+                           window=None if window is None else tuple(window))
     import fwid
     from fwid.report._design import write_discrimination
 

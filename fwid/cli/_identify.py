@@ -12,7 +12,7 @@ from pathlib import Path
 
 from .._errors import InputError
 from ._inputs import (CONTROLS, IDENTIFY_COLUMNS, VEHICLE_MODELS, check_controls, check_paths,
-                      read_sets)
+                      read_sets, window_of)
 
 
 def _stem(name: str) -> str:
@@ -39,6 +39,7 @@ def _json_option(path: str | None, flag: str, example: str):
 
 def identify(args) -> int:
     t0 = time.perf_counter()
+    window = window_of(args)
     check_paths(args.data, args.validate)
     prior = _json_option(getattr(args, "prior", None), "--prior",
                          '{"Mq": {"mean": -0.001, "std": 0.0002}}')
@@ -58,7 +59,8 @@ def identify(args) -> int:
     args.prior_values, args.bounds_values = prior, bounds
     vehicle = args.model if args.model in VEHICLE_MODELS else None
     require = [c for c in IDENTIFY_COLUMNS[args.model] if c != CONTROLS.get(args.model)]
-    train, held_out = read_sets(args.data, args.validate, require=require, vehicle_for=vehicle)
+    train, held_out = read_sets(args.data, args.validate, require=require, vehicle_for=vehicle,
+                                window=window)
     check_controls(train, args.model)
     check_controls(held_out, args.model)
     import fwid  # JAX from here on: every file has been read and checked
@@ -72,6 +74,8 @@ def identify(args) -> int:
         else:
             report, figures, summary = _cycle_averaged(args, flights, validate)
     report["warnings"] = _warnings_once(report, caught)
+    if window is not None:  # seconds on each flight's own t; null: an open side
+        report["window"] = list(window)
     print(summary(report))
     # the flights' own warnings (printed as they were read) lead the report's
     read = [w for r in (*train, *held_out) for w in r.warnings]

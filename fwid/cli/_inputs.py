@@ -64,16 +64,26 @@ def check_controls(records, model: str) -> None:
             "3211 input")
 
 
-def read_sets(*groups, require=(), vehicle_for: str | None = None) -> list[list]:
+def window_of(args):
+    """`--window START:END` read (`fwid.data._window.parse_window`), or None without it."""
+    from ..data._window import parse_window
+
+    text = getattr(args, "window", None)
+    return None if text is None else parse_window(text)
+
+
+def read_sets(*groups, require=(), vehicle_for: str | None = None, window=None) -> list[list]:
     """Read and check every flight of each group (a list of CSV files or folders; empty:
-    none) with numpy, before JAX is imported: [`fwid.data.read_flights`][] per group, and,
-    with `vehicle_for` (a model name), a `vehicle.json` beside every flight.
+    none) with numpy, before JAX is imported: [`fwid.data.read_flights`][] per group (each
+    flight cut to `window`, `(start, end)` s on its own `t`), and, with `vehicle_for` (a
+    model name), a `vehicle.json` beside every flight.
 
     **Returns:** the groups' records, for [`fwid.data.build_flights`][].
     """
     from ..data import read_flights
 
-    sets = [read_flights(*group, require=require) if group else [] for group in groups]
+    sets = [read_flights(*group, require=require, window=window) if group else []
+            for group in groups]
     for r in (r for records in sets for r in records):
         if vehicle_for and r.vehicle is None:
             raise FlightDataError(

@@ -136,6 +136,10 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: parameter bounds, {\"Mq\": {\"low\": .., \"high\": ..}, ..} "
                    "(null or a missing key: open), kept by a bounded Gauss-Newton step")
     i.add_argument("--quiet", action="store_true", help="no progress lines")
+    i.add_argument("--window", default=None, metavar="START:END",
+                   help="keep each flight's rows with START <= t <= END (seconds on its own t "
+                   "column, not from 0; START: or :END open), every flight given; the trim "
+                   "is estimated from the start of what is kept")
 
     rc = sub.add_parser("reconstruct", help="raw tracking takes and autopilot logs to flights: "
                         "smoothed states and loads (the guide's 'Formats and interfaces' page, "
@@ -157,7 +161,11 @@ def parser() -> argparse.ArgumentParser:
     rc.add_argument("--clock-offset", type=float, default=None, metavar="S",
                     help="t_tracking = t_onboard + S, instead of finding it from the gyro")
     rc.add_argument("--max-dropout", type=float, default=0.1, metavar="S",
-                    help="longest tracking gap bridged (s); a longer one is an error")
+                    help="longest tracking gap bridged (s); the take is split at longer ones "
+                    "and its longest airborne stretch kept")
+    rc.add_argument("--keep-ground", action="store_true",
+                    help="keep the whole record: no cut to where the vehicle is airborne "
+                    "(the rests on the ground are still named in reconstruction.json)")
     rc.add_argument("--min-overlap", type=float, default=2.0, metavar="S",
                     help="shortest overlap of take and autopilot log accepted (s)")
     rc.add_argument("--map", default=None, metavar="MAP.toml", dest="recording_map",
@@ -187,6 +195,10 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--out", default=None,
                    help="folder for diagnosis.json and the figure (without it nothing is written)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")
+    d.add_argument("--window", default=None, metavar="START:END",
+                   help="keep each flight's rows with START <= t <= END (seconds on its own t "
+                   "column, not from 0; START: or :END open), every flight given; the trim "
+                   "is estimated from the start of what is kept")
 
     g = sub.add_parser("design", help="design the control input of the next flight through "
                                       "the identified model (smallest parameter variances, "

@@ -31,7 +31,8 @@ def reconstruct(args) -> int:
                                   onboard=args.onboard, clock_offset=args.clock_offset,
                                   max_dropout=args.max_dropout, min_overlap=args.min_overlap,
                                   progress=say, pool=pool, recording_map=args.recording_map,
-                                  strict_frame=args.strict_frame)
+                                  strict_frame=args.strict_frame,
+                                  keep_ground=args.keep_ground)
         written = fwid.write_reconstruction(result, out, pool=pool) if result.flights else []
         if result.flights and args.figures:
             run_all(figure_file, [((fl, out / f"{fl.name}.reconstruction.png"), {})

@@ -27,6 +27,7 @@ from ._scale import check_vehicle_scale
 from ._sidefiles import VEHICLE_FILE, PathLike, read_sidecar, read_vehicle
 from ._timebase import uniform_flight
 from ._trim import estimate_trim, first_input_index, input_column
+from ._window import window_rows
 
 if TYPE_CHECKING:
     from ._flight import Flight, Vehicle
@@ -75,8 +76,11 @@ def _vehicle_beside(path: Path) -> dict[str, float] | None:
     return read_vehicle(vpath) if vpath.is_file() else None
 
 
-def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None) -> FlightRecord:
-    """Read and check one flight with numpy (no JAX): every error `load_flight` can raise."""
+def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None,
+          window=None) -> FlightRecord:
+    """Read and check one flight with numpy (no JAX): every error `load_flight` can raise;
+    with `window` (`(start, end)` s on its own `t`, None: open), the rows inside it (`_window`),
+    the trim and first input found on them."""
     if path.is_dir():
         raise FlightDataError(f"{path}: is a folder, not a flight file; use load_flights")
     if not path.is_file():
@@ -90,6 +94,10 @@ def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None) -> Fl
     check_flight(where, t, columns, require, lines)
     t, columns, resampled = uniform_flight(where, t, columns)
     notes = [resampled] if resampled else []
+    rows = slice(0, None)
+    if window is not None:
+        rows = window_rows(where, t, window)
+        t, columns = t[rows], {k: v[rows] for k, v in columns.items()}
     n = t.shape[0]
 
     vehicle_name = str(path.parent / VEHICLE_FILE)
@@ -106,6 +114,7 @@ def _read(path: Path, vehicle, require: tuple[str, ...], name: str | None) -> Fl
     trim_given, first_given = read_sidecar(path)
     col = input_column(columns, t)
     if first_given is not None:
+        first_given = max(first_given - rows.start, 0)
         if first_given >= n:
             raise FlightDataError(
                 f"{path.with_suffix('.json')}: 'first_input' = {first_given} is beyond the "
@@ -184,11 +193,14 @@ def load_flight(
     return _build(_read(Path(path), vehicle, _as_require(require), name))
 
 
-def read_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> list[FlightRecord]:
+def read_flights(*paths_or_folders: PathLike, require: Iterable[str] = (),
+                 window=None) -> list[FlightRecord]:
     """Read and check the flights that `paths_or_folders` stand for, with numpy only (no
     JAX): every error [`load_flights`][] can raise, and the records [`build_flights`][]
     turns into flights. A caller that loads two sets (e.g. training and validation flights)
-    reads both first, so that a bad file in either is answered before JAX is imported."""
+    reads both first, so that a bad file in either is answered before JAX is imported.
+    `window`: `(start, end)` seconds on each flight's own `t` (None: an open side), the
+    rows kept; the trim is estimated from the start of what is kept."""
     require = _as_require(require)
     files = flight_files(*paths_or_folders)
     vehicles: dict[Path, object] = {}
@@ -197,7 +209,7 @@ def read_flights(*paths_or_folders: PathLike, require: Iterable[str] = ()) -> li
         key = f.parent.resolve()
         if key not in vehicles:
             vehicles[key] = _vehicle_beside(f)
-        records.append(_read(f, vehicles[key], require, name))
+        records.append(_read(f, vehicles[key], require, name, window))
     return records
 
 

@@ -15,7 +15,7 @@ The modules:
 - Reading (numpy, no JAX): the form is told by the first line (`_read.py`, [`fwid.read_raw`][]):
   the fwid raw CSV (`_fwid_raw.py`) and the OptiTrack Motive CSV export with its autopilot
   log `NAME.onboard.csv` (`_motive.py`); the checks they share (uniform time base, unit
-  quaternions, dropouts no longer than `max_dropout`) and the `RawTake` (`_raw.py`);
+  quaternions, the dropouts) and the `RawTake` (`_raw.py`);
   rotations, quaternion sign continuity, y-up / z-up to north-east-down (`_rotations.py`);
   Motive's time base from its frame numbers and its length unit when unsaid (`_frames.py`,
   `_units.py`); held poses, orientation flips and position jumps dropped (`_glitches.py`).
@@ -30,6 +30,9 @@ The modules:
   iterated error-state smoother on SO(3) (`_attitude.py`).
 - The autopilot's clock against the tracking clock, and its signals resampled onto the
   take's time base without aliasing (`_clock.py`).
+- Where a take is airborne: the rests on the ground from the pose (and the logged wing beat),
+  the take cut to its longest airborne stretch between them and between tracking losses longer
+  than `max_dropout` (`_airborne.py`).
 - States and loads from the full nonlinear rigid-body equations (`_loads.py`); the frame
   check and residuals (`_checks.py`); the pipeline, [`fwid.reconstruct`][] (`_pipeline.py`);
   writing the flights and `reconstruction.json` atomically (`_write.py`); the per-take work

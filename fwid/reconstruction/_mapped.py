@@ -199,9 +199,6 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     q = np.where(tracked[:, None], q / np.linalg.norm(np.where(tracked[:, None], q, 1.0), axis=1,
                                                       keepdims=True), np.nan)
     t = grid
-    if "f" in sensors:  # motors stopped (on the ground): the flight is where the wings beat
-        tracked, note = _flapping_span(t, tracked, sensors["f"])
-        notes += [note] if note else []
     # the controls' own gaps (a log's empty cells) end the take where they start or stop it
     if sensors:
         tracked = tracked & np.all(np.isfinite(np.stack(list(sensors.values()), 1)), 1)
@@ -223,25 +220,6 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     return RawTake(take_name(path), str(path), source, convention.frame, t, pos, q, tracked,
                    sensors if m.log_is_take else None, log, gaps, notes,
                    convention if checked else None)
-
-
-def _flapping_span(t, tracked, f):
-    """`tracked` cut to the longest stretch where the mapped flapping frequency `f` is
-    positive (a flight file's `f` must be), and a note of what was cut."""
-    pos = np.isfinite(f) & (f > 0)
-    if pos.all():
-        return tracked, ""
-    edges = np.diff(np.concatenate([[0], pos.astype(int), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    if starts.size == 0:
-        raise FlightDataError("the mapped flapping frequency f is nowhere positive; check "
-                              "[inputs] f (its offset and scale) in the map")
-    k = int(np.argmax(ends - starts))
-    keep = np.zeros(len(t), bool)
-    keep[starts[k]:ends[k]] = True
-    return tracked & keep, (f"the mapped flapping frequency is not positive (the wings at "
-                            f"rest) outside t = {t[starts[k]]:.6g} to {t[ends[k] - 1]:.6g} s; "
-                            "the flight is cut to that stretch")
 
 
 def read_mapped_log(path, m: RecordingMap, take) -> OnboardLog | None:

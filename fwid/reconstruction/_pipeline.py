@@ -18,6 +18,7 @@ from .._errors import FlightDataError, FwidError, InputError
 from .._words import count
 from ..data._checks import check_flight
 from ..data._sidefiles import VEHICLE_FILE, read_vehicle
+from ._airborne import cut_take
 from ._attitude import smooth_attitude
 from ._body_frame import compose, split
 from ._checks import check_frame, residuals
@@ -200,7 +201,7 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
                 clock_offset: float | None = None, max_dropout: float = MAX_DROPOUT,
                 min_overlap: float = MIN_OVERLAP, vehicle=None, progress=None,
                 processes: int | None = None, pool=None, recording_map=None,
-                strict_frame: bool = False) -> Reconstruction:
+                strict_frame: bool = False, keep_ground: bool = False) -> Reconstruction:
     """Raw takes to flights (the flight files of 'Formats and interfaces'), smoothed, with loads.
 
     The states come from the smoother, the loads from the full nonlinear rigid-body
@@ -208,9 +209,13 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
 
     **Arguments:**
     - `paths`: raw takes (files, or folders of them): fwid raw CSVs or Motive CSV exports;
-    - `body`, `frame`, `onboard`, `max_dropout`, `recording_map`, `strict_frame`: as
+    - `body`, `frame`, `onboard`, `recording_map`, `strict_frame`: as
       [`fwid.read_raw`][] (a take with neither an autopilot log nor mapped controls is
       reconstructed from the pose alone, its flapping frequency from the pose's ripple);
+    - `max_dropout`: the longest tracking loss (s) bridged; the take is split at longer
+      ones and its longest airborne stretch kept (`_airborne.py`);
+    - `keep_ground`: keep the whole record; by default each take is cut to where the
+      vehicle is airborne (the cut named in its `warnings`);
     - `clock_offset`: `t_tracking = t_onboard + clock_offset` (s) for Motive takes, instead
       of finding it from the gyro;
     - `min_overlap`: the shortest overlap (s) of take and log accepted;
@@ -225,6 +230,8 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     (`(path, one-line message)`).
     """
     files = raw_files(paths)
+    if not max_dropout > 0:
+        raise InputError(f"max_dropout must be positive seconds, got {max_dropout!r}")
     if recording_map is not None and not isinstance(recording_map, RecordingMap):
         recording_map = read_map(recording_map)
     if onboard is not None and len(files) > 1:
@@ -235,7 +242,8 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
         return _reconstruct(files, pool, body=body, frame=frame, onboard=onboard,
                             clock_offset=clock_offset, max_dropout=max_dropout,
                             min_overlap=min_overlap, vehicle=vehicle, progress=progress,
-                            recording_map=recording_map, strict_frame=strict_frame)
+                            recording_map=recording_map, strict_frame=strict_frame,
+                            keep_ground=keep_ground)
     finally:
         if own and pool is not None:
             pool.shutdown()
@@ -288,11 +296,13 @@ def _flapping(take: RawTake):
 
 
 def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout, min_overlap,
-                 vehicle, progress, recording_map=None, strict_frame=False) -> Reconstruction:
+                 vehicle, progress, recording_map=None, strict_frame=False,
+                 keep_ground=False) -> Reconstruction:
     say = progress or (lambda msg: None)
     failures, ok = {}, []
+    # every gap read, however long: the take is split at those over max_dropout (_airborne)
     read = run_all(read_raw, [((f,), {"body": body, "frame": frame, "onboard": onboard,
-                                      "max_dropout": max_dropout, "recording_map": recording_map,
+                                      "max_dropout": np.inf, "recording_map": recording_map,
                                       "strict_frame": strict_frame}) for f in files], pool,
                    meanwhile=_fns)  # on workers: JAX imported and the programs made meanwhile
     for f, take in zip(files, read):
@@ -303,12 +313,20 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
         except FwidError as e:
             failures[str(f)] = str(e)
             say(f"{f.name}: failed (below)")
-    # 1. attitude without the gyro (the final one for a fwid raw CSV); the clock from it
+    # the airborne stretch of each take (the flapping frequency from the whole take)
+    cut = []
+    for f, take, veh, vpath in ok:
+        try:
+            fl, note = _flapping(take)
+            take = take if note is None else take._replace(warnings=take.warnings + [note])
+            take, fl, _ = cut_take(take, fl, max_dropout=max_dropout, keep_ground=keep_ground)
+            cut.append(((f, take, veh, vpath), fl))
+        except FwidError as e:
+            failures[str(f)] = str(e)
+            say(f"{f.name}: failed (below)")
+    ok, fs = [c[0] for c in cut], [c[1] for c in cut]
     takes = [t for _, t, _, _ in ok]
-    fs, notes = zip(*(_flapping(t) for t in takes)) if takes else ((), ())
-    takes = [t if n is None else t._replace(warnings=t.warnings + [n])
-             for t, n in zip(takes, notes)]
-    ok = [(f, t, v, p) for (f, _, v, p), t in zip(ok, takes)]
+    # 1. attitude without the gyro (the final one for a fwid raw CSV); the clock from it
     # one pass where the gyro's pass follows (it starts from this one's attitude), else two
     att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
                      passes=[1 if t.onboard is not None else 2 for t in takes])
