@@ -63,10 +63,12 @@ def _design(fn, params, names, exps, targets):
     return out
 
 
-def _whitener(v: np.ndarray) -> np.ndarray:
-    """Per equation, one over the residuals' standard deviation (a diagonal weighting)."""
+def _whitener(v: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """Per equation, one over the residuals' rms (a diagonal weighting), the rms floored at
+    `1e-9` of the equation's own `scale` (a noise-free equation keeps a finite weight)."""
     s = np.sqrt(np.mean(v**2, axis=0))
-    return 1.0 / np.where(s > 0, s, 1.0)
+    floor = 1e-9 * (np.ones_like(s) if scale is None else scale) + np.finfo(float).tiny
+    return 1.0 / np.maximum(s, floor)
 
 
 class _Regression:
@@ -85,7 +87,8 @@ class _Regression:
     def solve(self, passes: int = 3):
         """The weighted least-squares step, the weights relaxed to the residual variance of
         each equation (`passes` times); returns `(dtheta, v_i, S_i whitened, weights)`."""
-        W = np.ones(self.blocks[0][0].shape[1])
+        scale = np.sqrt(np.mean(np.concatenate([r for r, _ in self.blocks]) ** 2, axis=0))
+        W = _whitener(np.concatenate([r for r, _ in self.blocks]))
         for _ in range(passes):
             A = np.concatenate([(self._full(S, c) * W[None, :, None]).reshape(-1, self.p_all)
                                 for (r, S), c in zip(self.blocks, self.cols)])
@@ -93,7 +96,7 @@ class _Regression:
             ok = np.isfinite(b) & np.all(np.isfinite(A), axis=1)
             step, *_ = np.linalg.lstsq(A[ok], b[ok], rcond=None)
             vs = [r - self._full(S, c) @ step for (r, S), c in zip(self.blocks, self.cols)]
-            W = _whitener(np.concatenate(vs))
+            W = _whitener(np.concatenate(vs), scale)
         Sw = [self._full(S, c) * W[None, :, None] for (_, S), c in zip(self.blocks, self.cols)]
         return step, vs, Sw, W
 
@@ -156,6 +159,19 @@ def _regress(fn, params, layout, exps, targets, extra: int = 0, iters: int = 5):
             break
     return values, ([c[:len(lay)] for c, lay in zip(cols, layout)], vs,
                     [S[:, :, :p] for S in Sw], W, names)
+
+
+def _residual_statistics(vs, xs) -> dict:
+    """`lag1`, `colour`, `residual_corr` of the state equations' residuals (per output where
+    the outputs are the states; the largest over the flights)."""
+    ones = [jnp.ones(v.shape[0]) for v in vs]
+    v = np.concatenate(vs)
+    return dict(
+        lag1=jnp.max(jnp.stack([lag1_autocorrelation(jnp.asarray(a), m)
+                                for a, m in zip(vs, ones)]), axis=0),
+        colour=jnp.max(jnp.stack([colour_at_bandwidth(jnp.asarray(a), x, m)
+                                  for a, x, m in zip(vs, xs, ones)]), axis=0),
+        residual_corr=correlation(jnp.asarray(v.T @ v)))
 
 
 def fit_equation_error(
@@ -245,7 +261,9 @@ def fit_equation_error(
             cov[sub] = np.asarray(covariance(jnp.asarray(M), jnp.asarray(mid)))
             cov_cr[sub] = np.asarray(covariance(jnp.asarray(M)))
         cost += 0.5 * sum(float(np.sum(v**2)) for v in vws)
-    full_rank = bool(np.linalg.matrix_rank(M_all) == p)
+    d = np.sqrt(np.clip(np.diag(M_all), 0, None))
+    with np.errstate(all="ignore"):  # rank of the information scaled to a unit diagonal
+        full_rank = bool(np.all(d > 0) and np.linalg.matrix_rank(M_all / np.outer(d, d)) == p)
     finite = bool(np.all(np.isfinite(theta)) and np.all(np.isfinite(cov)))
     vs2 = regressions[-1][1]
     v2 = np.concatenate(vs2)
@@ -259,11 +277,7 @@ def fit_equation_error(
         cost=jnp.asarray(cost), cost_history=jnp.asarray([cost]), passes=jnp.asarray(1),
         steps=jnp.asarray(1), converged=jnp.asarray(full_rank and finite),
         start=jnp.asarray(theta), noise="diagonal",
-        lag1=jnp.max(jnp.stack([lag1_autocorrelation(jnp.asarray(v), jnp.ones(v.shape[0]))
-                                for v in vs2]), axis=0),
-        colour=jnp.max(jnp.stack([colour_at_bandwidth(jnp.asarray(v), x, jnp.ones(v.shape[0]))
-                                  for v, x in zip(vs2, xs)]), axis=0),
-        residual_corr=correlation(jnp.asarray(v2.T @ v2)))
+        **(_residual_statistics(vs2, xs) if model.outputs_are_states else {}))
     found = [w for w in fit_warnings(res, names, None, information=M_all)
              if "strongly coloured" not in w]  # the std allow for it; no simulation to blame
     if not full_rank:
