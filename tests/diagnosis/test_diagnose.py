@@ -215,7 +215,8 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
              for ld in c["affected"]]
     assert band == pytest.approx(100 * (1 - np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
     text = diagnosis_summary(d)
-    assert f"{band:.1f} % in its band, {c['shrink_pct']:.1f} % overall" in text
+    assert (f"{band:.1f} % in its band (1f), {c['shrink_pct']:.1f} % over all frequencies"
+            in text)
     # the table's columns said in words, each p the candidate's test alone (first round)
     assert "(chosen: kept by the forward selection" in text
     for c in d.candidates:
