@@ -61,8 +61,8 @@ def flights_line(d: Diagnosis) -> str:
     n = len(d.train) + len(d.test)
     return (f"  flights: the selection (p, confidence, gains, the confidence set) is a cross-fit "
             f"over all {n} flights, each scored by a model fitted on others; the test flights "
-            "take part, so they are not unseen by it, and it does not depend on which flights "
-            "are called training and which test. The shrinks are of the test flights' load "
+            "take part, so they are not unseen by it (swapping training and test changes it "
+            "little). The shrinks are of the test flights' load "
             f"error, the model re-fitted on the {len(d.train)} training flight"
             f"{'s' if len(d.train) != 1 else ''} only")
 
