@@ -58,8 +58,8 @@ def process_noise(train: Sequence[Flight], axis: str, cutoff: float = 5.0) -> di
     share of lags 1..`whiteness_lags` outside the band), `whiteness_band` (0.95),
     `whiteness_lags`, `whiteness_outside_max_pct`, `converged`, `passes` (relaxations of
     R), `warnings` (the fit's, one sentence each) and, where the fit failed, `message` and
-    `failed` (the error, one line; then `converged` is false and there are no estimates). Never raises for a failed
-    fit: the block is evidence, not a requirement of the verdict.
+    `failed` (the error, one line; then `converged` is false and there are no estimates).
+    Never raises for a failed fit: the block is evidence, not a requirement of the verdict.
     """
     model = get_model(axis)
     names = [f.name for f in train]
