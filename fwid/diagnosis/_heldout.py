@@ -5,8 +5,8 @@ The selection's evidence (`_significance.py`) is a cross-fit over every flight, 
 test alike: the test flights are fitted in one half and scored in the other, so they are not
 unseen by the selection (with one flight each way, swapping training and test leaves most
 of its p values as they were). The shrink (`shrink_pct`) is different: the baseline and
-the effect are re-fitted on the training flights only and scored on the test flights. Its own test is the same one-sided
-t test, on the test flights' blocks of about `BLOCK_S` seconds:
+the effect are re-fitted on the training flights only and scored on the test flights. Its
+own test is the same one-sided t test, on the test flights' blocks of about `BLOCK_S` seconds:
 
     d_j = log( sum_l SSE_j,l(before) / s_l  /  sum_l SSE_j,l(after) / s_l ),
 
