@@ -18,7 +18,13 @@ class FlightDataError(InputError):
 
 
 class ExcitationError(InputError):
-    """The data do not excite the model enough to identify its free parameters."""
+    """The data do not excite the model enough to identify its free parameters;
+    `parameters` names them where the estimator found them (`bq@1`: flight 1's copy of a
+    per-flight term), else it is empty."""
+
+    def __init__(self, *args, parameters=()):
+        super().__init__(*args)
+        self.parameters = tuple(parameters)
 
 
 class FitDivergedError(FwidError, RuntimeError):

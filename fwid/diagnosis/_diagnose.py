@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Callable, Sequence
 
+import numpy as np
+
+from .._errors import DiagnosisWarning, FwidError
 from ..data import Flight
 from ._attribution import unwrap
 from ._augment import IN_EOM
@@ -228,13 +232,19 @@ def diagnose(
     if process_noise and verdict == "random-disturbance":
         say("fitting the baseline by filter error on the training flights (process noise)")
         noise_block = fit_process_noise(train, axis, cutoff)
-    sim = None
+    sim, sim_block = None, None
     if simulation:
         say("simulating: baseline and " + (" + ".join(n for n, _ in in_sim) or "nothing added")
             + " fitted by output error on the training flights, simulated on the test flights")
-        sim = simulation_gap(train, test, axis, in_sim, cutoff, baseline=early.baseline.result(),
-                             augmented=early.get(in_sim))
-        early.close()
+        try:
+            sim = simulation_gap(train, test, axis, in_sim, cutoff,
+                                 baseline=early.baseline.result(), augmented=early.get(in_sim))
+            sim_block = sim.summary
+        except (FwidError, np.linalg.LinAlgError) as exc:
+            sim_block = failed_block(exc, "simulation")
+            sim_block["effects"] = [n for n, _ in in_sim]
+        finally:
+            early.close()
     say("mapping the gap")
     rounds = [{"level": lv, "added": added,
                "candidates": {k: {"p": ev.p, "t": ev.t, "gain_pct": 100.0 * ev.gain,
@@ -253,7 +263,7 @@ def diagnose(
         probes=probe_rows,
         unexplained=unexplained,
         disturbance=disturbance,
-        simulation=sim.summary if sim is not None else None,
+        simulation=sim_block,
         process_noise=noise_block,
         models=sim,
         first_round={k: {x: r[x] for x in ("p", "gain_pct", "t")}
@@ -267,6 +277,16 @@ def diagnose(
         states=provenance([f.name for f in c.train + c.test], reconstruction),
         settings=_settings(c, alpha, min_gain),
     )
+
+
+def failed_block(exc: BaseException, block: str) -> dict:
+    """The record of an optional block (`simulation`, ...) that failed: `{"failed": reason}`,
+    the reason one line; the failure is also issued as a `DiagnosisWarning`. The verdict and
+    every other block do not depend on it, so the diagnosis goes on."""
+    reason = " ".join(f"{type(exc).__name__}: {exc}".split())
+    warnings.warn(f"the {block} block failed and is left out ({reason}); the verdict and the "
+                  "other blocks stand", DiagnosisWarning, stacklevel=3)
+    return {"failed": reason}
 
 
 def select(c: Campaign, alpha: float, min_gain: float, early: EarlyFits | None,

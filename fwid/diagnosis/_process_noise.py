@@ -57,9 +57,9 @@ def process_noise(train: Sequence[Flight], axis: str, cutoff: float = 5.0) -> di
     where random forcing dominates its motion; `None` for an unmeasured state), `innovations_white` and `innovations_outside_pct` (per output: the
     share of lags 1..`whiteness_lags` outside the band), `whiteness_band` (0.95),
     `whiteness_lags`, `whiteness_outside_max_pct`, `converged`, `passes` (relaxations of
-    R), `warnings` (the fit's, one sentence each) and, where the fit failed, `message` (the
-    error; then `converged` is false and there are no estimates). Never raises for a failed
-    fit: the block is evidence, not a requirement of the verdict.
+    R), `warnings` (the fit's, one sentence each) and, where the fit failed, `message` and
+    `failed` (the error, one line; then `converged` is false and there are no estimates).
+    Never raises for a failed fit: the block is evidence, not a requirement of the verdict.
     """
     model = get_model(axis)
     names = [f.name for f in train]
@@ -72,7 +72,8 @@ def process_noise(train: Sequence[Flight], axis: str, cutoff: float = 5.0) -> di
             warnings.simplefilter("always")
             res = fit_filter_error(model, exps, names=names, local_per_flight=True)
     except Exception as err:  # noqa: BLE001 (any failure is recorded, the diagnosis goes on)
-        return {**block, "converged": False, "message": f"{type(err).__name__}: {err}"}
+        reason = " ".join(f"{type(err).__name__}: {err}".split())
+        return {**block, "converged": False, "message": reason, "failed": reason}
     F = {s: float(v) for s, v in zip(model.states, np.asarray(res.F))}
     dt = float(exps[0].t[1] - exps[0].t[0])
     F_rel = {}

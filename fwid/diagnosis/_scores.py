@@ -12,6 +12,7 @@ from ._campaign import Campaign
 from ._catalogue import Effect, filter_text, member_json
 from ._disturbance import RED_MIN, colour, spectrum
 from ._gapmap import BAND_NAMES, band_energy, rms
+from ._heldout import heldout_test
 from ._probes import drivers
 from ._selection import Selection
 from ._signals import BANDS
@@ -158,6 +159,7 @@ class Scores:
                         rms(np.concatenate([r[(ld, e.band)] for r in after_band])))
                    for ld in c.loads}
         affected = self.affected(ev)
+        shrink = self.shrink(self.rms_before, rms_after, affected)
         eb = sum(band_energy(r[ld], s) for r, s in zip(self.before, c.te_sig) for ld in affected)
         ea = sum(band_energy(r[ld], s) for r, s in zip(after_res, c.te_sig) for ld in affected)
         band_drop = {b: 100.0 * (1.0 - a / x) if x > 0 else 0.0
@@ -165,7 +167,7 @@ class Scores:
         return {
             "effect": e.name,
             "significant": e.name in [x.name for x, _ in sel.chosen],
-            "shrink_pct": self.shrink(self.rms_before, rms_after, affected),
+            "shrink_pct": shrink,
             "test_rms_before": self.rms_before,
             "test_rms_after": rms_after,
             "affected": affected,
@@ -179,6 +181,9 @@ class Scores:
             "band_shrink_pct": band_drop,
             "test_rms_in_band": {ld: {"before": b, "after": a} for ld, (b, a) in in_band.items()},
             "evidence": ev.as_dict(level),
+            "heldout": heldout_test(self.before, after_res, c.te_sig, affected,
+                                    self.rms_before, shrink, level,
+                                    [s.name for s in c.te_sig]),
             "description": e.description,
         }
 

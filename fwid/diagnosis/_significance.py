@@ -174,12 +174,17 @@ def cross_fit_folds(engine: Engine, n_flights: int, block_parents, n_train: int,
     return out
 
 
+def block_count(s) -> int:
+    """How many scoring blocks of about `BLOCK_S` seconds the flight signals `s` make."""
+    return max(1, round(s.n * s.dt / BLOCK_S))
+
+
 def scoring_blocks(sigs, first: int) -> tuple[list, list]:
     """Each flight (unit `first + k`) cut into scoring blocks of about `BLOCK_S` seconds:
     the blocks' signals and their `(parent unit, rows)`."""
     out, parents = [], []
     for k, s in enumerate(sigs):
-        count = max(1, round(s.n * s.dt / BLOCK_S))
+        count = block_count(s)
         for b in range(count):
             out.append(s.block(b, count))
             lo, hi = s.block_rows(b, count)

@@ -24,7 +24,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
-from .._errors import ExcitationError, FitDivergedError
+from .._errors import DiagnosisWarning, ExcitationError, FitDivergedError
 from ..data import Flight
 from ..estimate import least_squares_start, quiet_fits
 from ..identification import Identification, get_model, identify
@@ -67,15 +67,58 @@ def _diverged(ident: Identification, errors: dict) -> list[str]:
     return out
 
 
+#: The prior's standard deviation, relative to `max(1, |value|)`, that holds a bias term the
+#: flights cannot identify at its equation-error start value (`identify_pinned`).
+PIN_STD = 1e-9
+#: Refits `identify_pinned` tries, each pinning the terms the last one could not identify.
+PIN_TRIES = 3
+
+
+def _bias_terms(names: Sequence[str], model, n_flights: int) -> bool:
+    """Whether every name of `names` is a bias (per-flight) term of `model`: flight `i`'s
+    copy `k@i` in a joint fit of several flights, `k` itself in a fit of one."""
+    return bool(names) and all(n.split("@")[0] in model.local and ("@" in n) == (n_flights > 1)
+                               for n in names)
+
+
+def identify_pinned(train: Sequence[Flight], test: Sequence[Flight], model, cutoff: float,
+                    **kw) -> Identification:
+    """`identify(train, model, validate=test, joint=True, cutoff=cutoff, **kw)` (fit
+    warnings kept, not issued: `quiet_fits`) that does not stop at a bias term the flights
+    cannot identify. Where the estimator finds no information on some flight's bias terms
+    (an `ExcitationError` naming only per-flight copies such as `bq@1`), they are held at
+    their equation-error start values (`least_squares_start` of the baseline of the model's
+    axis on `train`, through a Gaussian prior of `PIN_STD` relative spread on exactly those
+    copies) and the fit is run again, up to `PIN_TRIES` times. Any other `ExcitationError` (a
+    parameter every flight shares) is raised. The terms held are the identification's
+    `pinned` (`{name: value}`, empty when none)."""
+    pins: dict[str, tuple[float, float]] = {}
+    for tries in range(PIN_TRIES + 1):
+        try:
+            with quiet_fits():
+                out = identify(list(train), model, validate=list(test), joint=True,
+                               cutoff=cutoff, prior=pins or None, **kw)
+            return dataclasses.replace(out, pinned={k: m for k, (m, _) in pins.items()})
+        except ExcitationError as exc:
+            new = [n for n in exc.parameters if n not in pins]
+            if tries == PIN_TRIES or not new or not _bias_terms(exc.parameters, model,
+                                                                 len(train)):
+                raise
+        base = get_model(model.name.split("+")[0])
+        start = least_squares_start(base, [averaged(f, base, cutoff) for f in train])
+        for n in new:
+            v = float(start.params[n.split("@")[0]])
+            pins[n] = (v, PIN_STD * max(1.0, abs(v)))
+    raise AssertionError("unreachable")  # the last try returns or raises
+
+
 def fit_baseline(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                  cutoff: float = 5.0) -> Identification:
     """The baseline (Eq. 7 or 8) fitted jointly on `train`, validated on `test`. It misses
     the effect by design, so its fit warnings (coloured residuals, slow convergence) are
     expected: kept in its fits (`FitResult.warnings`), not issued (`quiet_fits`, which also
     holds when this runs in a worker thread beside the rest of the diagnosis)."""
-    with quiet_fits():
-        return identify(list(train), get_model(axis), validate=list(test), joint=True,
-                        cutoff=cutoff)
+    return identify_pinned(train, test, get_model(axis), cutoff)
 
 
 def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
@@ -101,13 +144,24 @@ def fit_augmented(train: Sequence[Flight], test: Sequence[Flight], axis: str,
         with quiet_fits():
             start = least_squares_start(base, [averaged(f, base, cutoff) for f in train])
             fitted = {k: float(v) for k, v in start.params.items() if k not in base.local}
-            after = identify([prepare(f) for f in train], model.with_params(fitted),
-                             validate=[prepare(f) for f in test], joint=True, cutoff=cutoff,
-                             start="model")
+            after = identify_pinned([prepare(f) for f in train], [prepare(f) for f in test],
+                                    model.with_params(fitted), cutoff, start="model")
     except (FitDivergedError, ExcitationError, np.linalg.LinAlgError) as exc:
         return None, (f"the model with {' + '.join(in_eom)} in the EOM could not be fitted "
                       f"and simulated ({exc}): the simulated gap is not measured"), []
     return after, None, [m for f in after.fits for m in f.warnings]
+
+
+def fixed_text(fixed: dict) -> str | None:
+    """The sentence on the bias terms `identify_pinned` held (`fixed_bias_terms` of the
+    block: per model, `{name: value}`), or `None` when none was."""
+    parts = [f"{', '.join(f'{k} = {v:.4g}' for k, v in terms.items())} in the {which} model"
+             for which, terms in fixed.items() if terms]
+    if not parts:
+        return None
+    return ("simulation: the flights carry no information on the bias terms "
+            + "; ".join(parts) + " (too little excitation on those flights): held at their "
+            "equation-error start values, the fit went on")
 
 
 class EarlyFits:
@@ -171,6 +225,11 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
                          f"off by more than {DIVERGED:g} times their own RMS: an unstable model "
                          "run open loop), so it says nothing of the effect; see "
                          "simulation.warnings" if diverged else None)
+    fixed = {"baseline": dict(getattr(before_id, "pinned", {})),
+             "augmented": dict(getattr(after_id, "pinned", {}) if after_id is not None else {})}
+    note = fixed_text(fixed)
+    if note:
+        warnings.warn(note, DiagnosisWarning, stacklevel=2)
     summary = {
         "states": states,
         "effects": in_eom,
@@ -190,7 +249,11 @@ def simulation_gap(train: Sequence[Flight], test: Sequence[Flight], axis: str,
         "warnings": sorted({str(w.message).split(": ", 1)[-1] for w in caught}
                            | {m.split(": ", 1)[-1] for m in fit_warnings}
                            | {m.split(": ", 1)[-1] for f in before_id.fits
-                              for m in f.warnings}),
+                              for m in f.warnings}
+                           | ({note} if note else set())),
+        # bias terms the flights carry no information on, held at their equation-error
+        # start values so that the fit goes on (`identify_pinned`)
+        "fixed_bias_terms": fixed,
         **({"message": message} if message else {}),
         "method": "baseline and augmented model fitted jointly on the training flights "
                   "(output-error ML, Eqs. 10-11), simulated on the test flights with their "

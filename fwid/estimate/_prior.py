@@ -206,10 +206,13 @@ def bounds_from(bounds) -> dict[str, tuple[float | None, float | None]]:
 def _entries(what: str, given: Mapping, model_name: str, free: Sequence[str],
              names: Sequence[str]) -> dict[str, list[int]]:
     """Which entries of the free vector (`names`) each given name sets: itself, or every
-    flight's copy `k@i` of a per-flight parameter `k`. Unknown names: one-line InputError."""
+    flight's copy `k@i` of a per-flight parameter `k`; a name `k@i` sets flight `i`'s copy
+    only (none where the fit has no per-flight copies). Unknown names: one-line InputError."""
     out = {}
     for k in given:
         idx = [i for i, n in enumerate(names) if n == k or n.split("@")[0] == k]
+        if not idx and "@" in k and k.split("@")[0] in free:
+            continue
         if not idx:
             raise InputError(f"{what}: {k!r} is not a free parameter of the {model_name} model; "
                              f"its free parameters are {', '.join(free)}")

@@ -197,7 +197,8 @@ def check_information(result, names, flights):
         raise ExcitationError(
             f"{', '.join(flights)}: the data carry no information on parameter"
             f"{'s' if len(bad) > 1 else ''} {', '.join(bad)} (too little excitation); fix "
-            f"them ({advice('fix')}) or add flights whose inputs excite them"
+            f"them ({advice('fix')}) or add flights whose inputs excite them",
+            parameters=bad,
         )
 
 

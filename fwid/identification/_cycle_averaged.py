@@ -42,6 +42,8 @@ class Identification:
     - `closed_loop`: the closed-loop test of each estimation flight's control
       ([`ClosedLoop`][], `None` where it could not run).
     - `warnings`: what the fits' own warnings do not say about the flights (a closed loop).
+    - `pinned`: bias terms held at their start values because the flights carry no
+      information on them (`{name: value}`; set by the diagnosis's fits, empty otherwise).
 
     `fit` is the first (or joint) fit, `eigenvalues` and `modes` those of `model`, and
     `state_space()` the linear system at the trim ([`fwid.StateSpace`][]).
@@ -56,6 +58,7 @@ class Identification:
     consts: dict[str, float] = field(default_factory=dict)
     closed_loop: list[ClosedLoop | None] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    pinned: dict[str, float] = field(default_factory=dict)
 
     @property
     def fit(self) -> FitResult:

@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from ..diagnosis import BAND_NAMES, Diagnosis
 from ..diagnosis._provenance import provenance_text
+from ..diagnosis._simulation import fixed_text
 from ..diagnosis._signals import AXIS_LOADS
 
 _BAND_LABELS = ("<5 Hz", "1f", "2f", "3f", "1f±", "2f±", "3f±", "rest")
@@ -32,8 +33,38 @@ def in_band_shrink(c: dict) -> float | None:
 
 def _shrink_text(c: dict) -> str:
     band = in_band_shrink(c)
-    overall = f"{c['shrink_pct']:.1f} % overall"
-    return f"{band:.1f} % in its band, {overall}" if band is not None else overall
+    overall = f"{c['shrink_pct']:.1f} % over all frequencies"
+    return (f"{band:.1f} % in its band ({_band_label(c['band'])}), {overall}"
+            if band is not None else overall)
+
+
+def heldout_text(c: dict) -> str:
+    """What the test flights alone say of a row's shrink (`heldout`): its p value on their
+    blocks and, when the shrink is below the smallest one they resolve, that it is within
+    their noise and how many test flights would settle it."""
+    h = c.get("heldout")
+    if h is None:
+        return ""
+    out = f"; on the test flights alone p = {h['p']:.2g} over their {h['blocks']} blocks"
+    if h["within_noise"]:
+        out += (f"; within the noise of these flights (the smallest overall shrink their "
+                f"blocks resolve is {h['detection_limit_pct']:.1f} %)")
+        if h["flights_to_settle"]:
+            out += (f": about {h['flights_to_settle']} test flights like these would settle "
+                    "it")
+    return out
+
+
+def flights_line(d: Diagnosis) -> str:
+    """Which flights chose the effect and which scored its shrink, truthfully: the selection
+    is a cross-fit over every flight, the test flights among them."""
+    n = len(d.train) + len(d.test)
+    return (f"  flights: the selection (p, confidence, gains, the confidence set) is a cross-fit "
+            f"over all {n} flights, each scored by a model fitted on others; the test flights "
+            "take part, so they are not unseen by it (swapping training and test changes it "
+            "little). The shrinks are of the test flights' load "
+            f"error, the model re-fitted on the {len(d.train)} training flight"
+            f"{'s' if len(d.train) != 1 else ''} only")
 
 
 def _confidence_text(c: float) -> str:
@@ -73,8 +104,10 @@ def confidence_set_line(d: Diagnosis) -> str | None:
     detail = "; ".join(f"{_explanation_text(x['explanation'])} {x['gain_pct']:.1f} %, "
                        f"p = {x['p_value']:.2g}" for x in kept)
     line = (f"  {names}: these flights cannot tell them apart (the model confidence set of the "
-            f"explanations at {100 * d.settings.get('confidence_level', 0.1):g} %; held-out "
-            f"gain and p value: {detail})")
+            f"explanations at {100 * d.settings.get('confidence_level', 0.1):g} %; gain: the "
+            "typical drop of a 1 s block's load error variance in its effects' bands, "
+            "cross-fit over all flights; and MCS p value: "
+            f"{detail})")
     nxt = d.next_flight
     if nxt is not None:
         a, b = nxt["tell_apart"]
@@ -112,6 +145,7 @@ def diagnosis_summary(d: Diagnosis) -> str:
     lines = [
         (f"fwid diagnose ({d.axis}): {len(d.train)} training, {len(d.test)} test flights, "
         f"{len(d.folds)} scoring blocks"),
+        flights_line(d),
         f"  where the model misses: most in {worst}, {bands[top_band]:.0f} % of its held-out "
         f"error at {_band_label(top_band)}; " + _manoeuvre_text(tm)
         + (f"; growing with {st['top']} ({st['top_spread']:.1f}x across its range)"
@@ -120,8 +154,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
     if d.verdict == "none":
         lim = [c["detection_limit_pct"] for c in d.candidates]
         lines.append("  VERDICT: none (no candidate effect improves the held-out fit "
-                     "significantly; with 80 % power the test would have seen a drop of the "
-                     f"held-out error of {min(lim):.1f}-{max(lim):.1f} %, see 'detect. limit')")
+                     "significantly; with 80 % power the cross-fit would have seen a drop of "
+                     "the load error variance in the effect's band of "
+                     f"{min(lim):.1f}-{max(lim):.1f} %, see 'smallest gain seen')")
     elif d.verdict == "random-disturbance":
         dist = d.disturbance
         size = ", ".join(f"{ld} {v:.3g}" for ld, v in dist["rms"].items())
@@ -156,8 +191,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      f"is predictable from the measured signals ({u['description']}"
                      + (f", {u['variant']}" if u["variant"] else "")
                      + f"; p = {u['p']:.2g}), but no catalogue effect explains it better; "
-                     f"drivers: {drv}; adding it shrinks the held-out RMS "
-                     f"{u['test_shrink_pct']:.1f} %")
+                     f"drivers: {drv}; adding it shrinks the test flights' RMS error of "
+                     f"{'/'.join(u['affected'])} {u['test_shrink_pct']:.1f} % over all "
+                     "frequencies" + heldout_text(d.lead))
     else:
         c = d.candidate(d.verdict)
         change = ", ".join(
@@ -165,8 +201,12 @@ def diagnosis_summary(d: Diagnosis) -> str:
             for ld in c["affected"])
         lines.append(f"  VERDICT: {d.verdict}"
                      + (f" ({c['variant']})" if c["variant"] else "")
-                     + f", confidence {_confidence_text(c['confidence'])}: held-out RMS of "
-                     f"{'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})")
+                     + f", selection confidence {_confidence_text(c['confidence'])} (cross-fit "
+                     f"over all flights: a 1 s block's load error variance in its band drops "
+                     f"{c['evidence']['heldout_gain_pct']:.1f} % typically)")
+        lines.append(f"  on the test flights, re-fitted on the training flights only: the RMS "
+                     f"error of {'/'.join(c['affected'])} shrinks {_shrink_text(c)} ({change})"
+                     + heldout_text(c))
         red = (d.disturbance or {}).get("leaves_red")
         if red:  # a later entry tracked a disturbance: say so beside the verdict
             lines.append(f"  beside it, a disturbance: {' + '.join(red['effects'])} would cut "
@@ -183,8 +223,8 @@ def diagnosis_summary(d: Diagnosis) -> str:
         without = [x for x in d.confidence_set if e["effect"] not in x["explanation"]]
         lines.append(f"  and also: {e['effect']}"
                      + (f" ({e['variant']})" if e["variant"] else "")
-                     + f", p = {e['p']:.2g}: a further {e['shrink_pct']:.1f} % on "
-                     f"{'/'.join(e['affected'])}"
+                     + f", p = {e['p']:.2g}: the test flights' RMS error of "
+                     f"{'/'.join(e['affected'])} shrinks a further {e['shrink_pct']:.1f} %"
                      + (f" (the confidence set also keeps "
                         f"{_explanation_text(without[0]['explanation'])} without it: these "
                         "flights cannot tell whether it is there)" if without else ""))
@@ -201,7 +241,10 @@ def diagnosis_summary(d: Diagnosis) -> str:
                      f"driven by {u['drivers'][0]['signal']}: a further "
                      f"{u['test_shrink_pct']:.1f} % on {'/'.join(u['affected'])}")
     sim = d.simulation
-    if sim is not None and sim.get("message"):
+    if sim is not None and sim.get("failed"):
+        lines.append(f"  in simulation: not measured: the block failed ({sim['failed']}); the "
+                     "verdict and the load scores above do not depend on it")
+    elif sim is not None and sim.get("message"):
         lines.append(f"  in simulation: {sim['message']}")
     elif sim is not None:
         change = ", ".join(f"{k} {sim['test_rms_before'][k]:.3g} -> {sim['test_rms_after'][k]:.3g}"
@@ -214,10 +257,12 @@ def diagnosis_summary(d: Diagnosis) -> str:
             + (f"; not in the cycle-averaged EOM: {', '.join(sim['left_out'])}"
                if sim["left_out"] else "")
             + _convergence_caution(sim))
+    if sim is not None and fixed_text(sim.get("fixed_bias_terms", {})):
+        lines.append("  " + fixed_text(sim["fixed_bias_terms"]))
     lines.append("  each candidate added alone to the model, re-fitted on the training flights and "
                  "scored on the test flights:")
     lines.append(f"  {'candidate':<18} {'chosen':>6} {'p':>8} {'shrink in band %':>16} "
-                 f"{'overall %':>9} {'smallest seen %':>15}")
+                 f"{'overall %':>9} {'smallest gain seen %':>20}")
     first = d.first_round or {}
     for k, c in enumerate(d.candidates + d.probes):
         if k == len(d.candidates):
@@ -227,12 +272,15 @@ def diagnosis_summary(d: Diagnosis) -> str:
         lines.append(
             f"  {c['effect']:<18} {('yes' if c['significant'] else 'no'):>6} {p:8.2g} "
             f"{(f'{band:.1f}' if band is not None else '-'):>16} {c['shrink_pct']:9.1f} "
-            f"{c['detection_limit_pct']:15.1f}"
+            f"{c['detection_limit_pct']:20.1f}"
         )
-    lines.append("  (chosen: kept by the forward selection over the held-out blocks; p: the test "
-                 "of the candidate alone; smallest seen: the shrink the test detects with 80 % "
-                 "power. Details in diagnosis.json; how to read them: the guide's page on the "
-                 "diagnosis)")
+    lines.append("  (chosen: kept by the forward selection; p: its test of the candidate alone, "
+                 "cross-fit over all flights; shrink in band / overall: the drop of the test "
+                 "flights' RMS error of the affected loads in the effect's band / over all "
+                 "frequencies, re-fitted on the training flights only; smallest gain seen: the "
+                 "drop of the load error variance in the band (typical 1 s block, cross-fit) "
+                 "that the test detects with 80 % power. Details in diagnosis.json; how to read "
+                 "them: the guide's page on the diagnosis)")
     return "\n".join(lines)
 
 

@@ -206,7 +206,7 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
     """The terminal quotes the in-band shrink as the headline next to the overall one; the
     gap map shows the axis's own loads only."""
     from fwid.report import diagnosis_summary, plot_gap_map
-    from fwid.report._diagnosis import in_band_shrink
+    from fwid.report._diagnosis import _band_label, in_band_shrink
 
     d = _diagnose(*effect_flights("flap-coupling", seed=1))
     c = d.candidate(d.verdict)
@@ -215,7 +215,9 @@ def test_summary_and_gap_map_talk_about_the_axis(effect_flights):
              for ld in c["affected"]]
     assert band == pytest.approx(100 * (1 - np.sqrt(np.mean([(a / b) ** 2 for b, a in pairs]))))
     text = diagnosis_summary(d)
-    assert f"{band:.1f} % in its band, {c['shrink_pct']:.1f} % overall" in text
+    label = _band_label(c["band"])
+    assert (f"{band:.1f} % in its band ({label}), {c['shrink_pct']:.1f} % over all "
+            "frequencies" in text)
     # the table's columns said in words, each p the candidate's test alone (first round)
     assert "(chosen: kept by the forward selection" in text
     for c in d.candidates:
