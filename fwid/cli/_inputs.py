@@ -66,10 +66,12 @@ def check_controls(records, model: str) -> None:
 
 def window_of(args):
     """`--window START:END` read (`fwid.data._window.parse_window`), or None without it."""
+    text = getattr(args, "window", None)
+    if text is None:  # (no import: bad paths are answered before numpy is loaded)
+        return None
     from ..data._window import parse_window
 
-    text = getattr(args, "window", None)
-    return None if text is None else parse_window(text)
+    return parse_window(text)
 
 
 def read_sets(*groups, require=(), vehicle_for: str | None = None, window=None) -> list[list]:

@@ -45,7 +45,7 @@ from ._problem import FitResult, check_excitation, free_layout
 from ._regression import derivative, stacked
 from ._uncertainty import (coloured_residual_middle, correlation, correlation_length,
                            covariance, lag1_autocorrelation)
-from ._warnings import fit_warnings, issue
+from ._warnings import fit_warnings, issue, quiet_fits
 
 
 def _design(fn, params, names, exps, targets):
@@ -114,12 +114,21 @@ def _uncertainty(Sw, vws):
     return M, mid
 
 
-def _state_equations(model: GreyBoxModel) -> np.ndarray:
-    """The indices of the measured states among the outputs (equation error needs them)."""
+def measured_state_index(model: GreyBoxModel) -> np.ndarray | None:
+    """The indices of the states among the outputs (`None` when some state is not
+    measured)."""
     if model.outputs_are_states:
         return np.arange(len(model.states))
     if model.measured_states is not None:
         return np.asarray(model.measured_states)
+    return None
+
+
+def _state_equations(model: GreyBoxModel) -> np.ndarray:
+    """The indices of the measured states among the outputs (equation error needs them)."""
+    idx = measured_state_index(model)
+    if idx is not None:
+        return idx
     raise InputError(f"the {model.name} model's states are not all measured (outputs "
                      f"{', '.join(model.outputs)}): equation error regresses the measured "
                      "state derivatives; fit it by output error")
@@ -296,8 +305,6 @@ def equation_error_locals(model: GreyBoxModel, exp: Experiment, name: str) -> di
     held: the mean of the state equations' residuals at the measured states, which needs no
     simulation (an unstable model's diverges). How a held-out flight's biases are
     re-estimated where its simulation cannot be trusted."""
-    from ._warnings import quiet_fits
-
     with quiet_fits():
         r = fit_equation_error(model.with_free(model.local), [exp], names=[name])
     return {k: float(v) for k, v in zip(r.names, np.asarray(r.theta))}
@@ -312,3 +319,17 @@ def loads_at_measured_states(model: GreyBoxModel, exp: Experiment) -> np.ndarray
     F = np.asarray(jax.vmap(lambda xk, uk: model.forces(xk, uk, model.params, exp.consts))(
         x, exp.u))
     return F + np.mean(np.asarray(exp.forces) - F, axis=0)
+
+
+def equation_error_start(model: GreyBoxModel, exps: Sequence[Experiment], names: Sequence[str],
+                         start):
+    """`(start, result)`: with `start="least-squares"` and the model's states measured, the
+    equation-error estimate (biases shared by the flights) and its [`fwid.FitResult`][],
+    where the methods that filter or restart from the measured states (filter error,
+    multiple shooting) begin; otherwise `start` as given and `None`."""
+    if not (isinstance(start, str) and start == "least-squares") \
+            or measured_state_index(model) is None:
+        return start, None
+    with quiet_fits():
+        ee = fit_equation_error(model, list(exps), names=list(names), local_per_flight=False)
+    return (ee.model, ee) if bool(ee.converged) else (start, None)

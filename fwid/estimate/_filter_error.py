@@ -9,10 +9,22 @@ simulation)
     y_k = h(x~_k, u_k),   nu_k = z_k - y_k,   x^_k = x~_k + K nu_k,
     x~_{k+1} = x^_k + int f(x, u) dt,
 
-with the steady-state gain `K = P C^T R^-1` (Eq. 5.48) of the model linearised at the
-experiment's initial state and first input (Eqs. 5.50-5.51; exact for a linear model), `P`
-from the Riccati equation of `fwid.estimate._riccati` with the process-noise distribution
-matrix `F` (diagonal, one entry per state, estimated with the parameters). The cost is the
+with the steady-state gain of the model linearised at the experiment's initial state and
+first input (Eqs. 5.50-5.51; exact for a linear model), `P` from the Riccati equation of
+`fwid.estimate._riccati` with the process-noise distribution matrix `F` (diagonal, one entry
+per state, estimated with the parameters). The gain is the discrete corrector's
+`K = P C^T (C P C^T + R)^-1`: the book's `K = P C^T R^-1` (Eq. 5.48) to first order in
+`P / R`, and, unlike it, never beyond one where the process noise over a sample outweighs
+the innovations (`F^2 dt > R`: accurate cycle-averaged data of an unstable vehicle), where
+the book's gain over-corrects every sample and the filter diverges.
+
+The start (with `start="least-squares"`, for a model whose states are measured) is the
+equation-error estimate and its residual covariance (`fwid.estimate._equation_error`): the
+parameters, `F` from the covariance `Q` of its state equations' residuals as white process
+noise over a sample (`F_i = sqrt(Q_ii dt)`), and the first `R` of the gain from the
+one-sample-ahead prediction errors of the outputs from the measured states: what an
+unstable vehicle flown in closed loop needs, whose open-loop simulation (the book's start
+of `R`) runs away. The cost is the
 negative log-likelihood `1/2 sum nu^T R^-1 nu + N/2 ln det R` (Eq. 5.36) with the innovation
 covariance `R` estimated explicitly (Eq. 5.40, diagonal as the book by default).
 
@@ -43,6 +55,7 @@ from ..simulation._experiment import Experiment, stack_experiments
 from ._gauss_newton import NoiseModel, noise_covariance, solve_relaxed
 from ._noise import check_noise
 from ._problem import FitResult, flight_params, free_layout, merge_batch, prepare
+from ._equation_error import equation_error_start, measured_state_index
 from ._riccati import steady_state_gain
 from ._steps import rk4_step
 from ._uncertainty import correlation, covariance, lag1_autocorrelation
@@ -110,7 +123,8 @@ def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment, gain: bool = 
     A = jax.jacfwd(model.f, argnums=0)(e.x0, u0, params, e.consts)  # Eq. (5.50)
     C = jax.jacfwd(model.h, argnums=0)(e.x0, u0, params, e.consts)  # Eq. (5.51)
     dt = e.t[1] - e.t[0]
-    K, P = steady_state_gain(A, C, jnp.diag(fdiag**2), Rk, dt)
+    _, P = steady_state_gain(A, C, jnp.diag(fdiag**2), Rk, dt)
+    K = jnp.linalg.solve(C @ P @ C.T + Rk, C @ P).T  # bounded: see the module docstring
     if not gain:
         K, P = jnp.zeros_like(K), jnp.zeros_like(P)
     u_next = jnp.concatenate([e.u[1:], e.u[-1:]], axis=0)
@@ -165,6 +179,25 @@ def _output_error_r(model, theta, batch, p, diagonal, n_local=0):
     return noise_covariance(v, jnp.sum(batch.mask), diagonal, jnp.zeros(v.shape[-1]))
 
 
+def _one_step_r(model: GreyBoxModel, exps: Sequence[Experiment], diagonal: bool):
+    """The covariance of the outputs' one-sample-ahead prediction errors from the measured
+    states (one RK4 step of the model from each measured state): the innovations of a filter
+    that trusts the measurements, the start of `R` from an equation-error estimate."""
+    idx = measured_state_index(model)
+    nus = []
+    for e in exps:
+        x = e.z[:, idx]
+
+        def one(xk, uk, uk1, p=model.params, c=e.consts, dt=e.dt):
+            return model.h(rk4_step(model.f, xk, uk, uk1, dt, p, c), uk1, p, c)
+
+        y = jax.vmap(one)(x[:-1], e.u[:-1], e.u[1:])
+        nus.append(np.asarray(e.z[1:] - y))
+    nu = np.concatenate(nus)
+    R = nu.T @ nu / len(nu)
+    return jnp.asarray(np.diag(np.diag(R)) if diagonal else R)
+
+
 def compensate_f(fdiag, C, R_old, R_new):
     """Eq. (5.41): the F entries scaled for the change of R, so that the gain stays about the
     same: `f_i *= sum_j C_ji^2 r_j^-1 sqrt(r_j,new / r_j) / sum_j C_ji^2 r_j^-1` with `r_j`
@@ -212,8 +245,9 @@ def fit_filter_error(
     """[`fwid.fit`][] with `method="filter-error"` (see the module docstring).
 
     **Options:**
-    - `process_noise`: start values of the diagonal of F, one per state (default: 1 % of
-      each measured state's RMS rate, see `_default_f`).
+    - `process_noise`: start values of the diagonal of F, one per state (default: from the
+      equation-error start, see the module docstring; where the states are not measured, 1 %
+      of each measured state's RMS rate, see `_default_f`).
     - `max_outer`, `outer_rtol`, `steps_per_pass`: relaxation passes, each
       `steps_per_pass` Gauss-Newton steps and then the R of the gain updated and F
       compensated, until the diagonal of R changes by less than `outer_rtol` (relative; the
@@ -230,16 +264,23 @@ def fit_filter_error(
     diagonal = noise != "full"
     t0 = time.perf_counter()
     n_local = len(exps) if (local_per_flight and len(exps) > 1 and model.local) else 0
+    start, ee = equation_error_start(model, exps, names, start)
     start_model, theta0 = prepare(model, list(exps), list(names), start, n_local)
     p = theta0.shape[0]
-    f0 = np.asarray(_default_f(model, exps) if process_noise is None else process_noise,
-                    dtype=float)
+    if process_noise is not None:
+        f0 = process_noise
+    elif ee is not None:
+        f0 = np.sqrt(np.clip(np.diag(np.asarray(ee.R)), 0, None) * float(exps[0].dt)) + 1e-12
+    else:
+        f0 = _default_f(model, exps)
+    f0 = np.asarray(f0, dtype=float)
     if f0.shape != (len(model.states),):
         raise ValueError(f"process_noise: one value per state ({', '.join(model.states)}), "
                          f"not {f0.shape}")
     batch = stack_experiments(list(exps))
     theta = jnp.concatenate([theta0, jnp.asarray(f0)])
-    Rk = _output_error_r(start_model, theta, batch, p, diagonal, n_local)
+    Rk = (_one_step_r(start_model, exps, diagonal) if ee is not None
+          else _output_error_r(start_model, theta, batch, p, diagonal, n_local))
     if not bool(jnp.all(jnp.isfinite(Rk))):
         Rk = jnp.diag(jnp.var(batch.z.reshape(-1, batch.z.shape[-1]), axis=0))
     if progress:

@@ -22,6 +22,10 @@ segments join exactly and the estimates are those of output error on a trajector
 follows the data. The Cramer-Rao covariance is the upper-left block of the inverse KKT
 matrix (the information restricted to the constraint surface). Jacobians by forward-mode
 autodiff through the RK4 integration of each segment (`fwid.estimate._steps`).
+
+With `start="least-squares"` and the states measured, the fit starts from the equation-error
+estimate (`fwid.estimate._equation_error`), which needs no simulation, as an unstable
+vehicle flown in closed loop does.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ import numpy as np
 from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment
 from ..simulation._simulate import simulate
+from ._equation_error import equation_error_start
 from ._gauss_newton import ml_cost, noise_covariance
 from ._noise import check_noise, fall_back
 from ._problem import FitResult, prepare
@@ -244,6 +249,7 @@ def fit_shooting(
     if not isinstance(segments, int) or segments < 1:
         raise ValueError(f"segments must be a positive integer, not {segments!r}")
     t0 = time.perf_counter()
+    start, _ = equation_error_start(model, exps, names, start)
     start_model, theta0 = prepare(model, list(exps), list(names), start, 0)
     seg, s0 = _segments(model, exps, segments)
     vec0 = jnp.concatenate([theta0, jnp.asarray(s0, dtype=float)])
