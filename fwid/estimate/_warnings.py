@@ -152,8 +152,8 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
         out.append(f"{who}: the residuals are strongly coloured (autocorrelation "
                    f"{colour:.3f} on {out_k} at the data's bandwidth) and correlated "
                    f"between outputs ({a} and {b}: "
-                   f"{c:+.2f}): process noise (turbulence, which biases output error) or a "
-                   "missing effect, not measurement noise; "
+                   f"{c:+.2f}): process noise or a missing effect, not measurement noise "
+                   "(process noise biases output error); "
                    "the standard deviations `std` allow for the colour, `std_cr` does not; "
                    f"next: {advise('model-error', method)}")
     pairs = correlated_pairs(result.corr, result.names)
