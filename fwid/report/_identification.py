@@ -97,7 +97,7 @@ def prior_and_bounds(fits, flights=None) -> dict:
 
 def pooled_metrics(flight_fits) -> dict:
     """Metrics over several flights' samples pooled together (outputs and forces), with
-    when a flight's simulation diverged ([`mark_diverged`][]) where one did."""
+    when a flight's simulation diverged (`fwid.report._bounded.mark_diverged`) where one did."""
     if not flight_fits:
         return {}
     names = list(flight_fits[0].metrics)

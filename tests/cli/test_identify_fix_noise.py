@@ -8,13 +8,6 @@ import pytest
 from fwid.cli import main
 
 
-@pytest.fixture(scope="module")
-def flight(tmp_path_factory):
-    out = tmp_path_factory.mktemp("flights")
-    assert main(["simulate", str(out), "--flights", "1", "--seed", "4", "--duration", "2.5"]) == 0
-    return out / "lon_0.csv"
-
-
 def test_fix_holds_the_parameters_and_noise_picks_r(flight, tmp_path, capsys):
     out = tmp_path / "fixed"
     rc = main(["identify", str(flight), "--model", "lon", "--fix", "Xq=0", "--fix", "Zq=-1e-3",
