@@ -37,6 +37,37 @@ def _json_option(path: str | None, flag: str, example: str):
     return obj
 
 
+def _fixed(items) -> dict[str, float]:
+    """`--fix NAME=VALUE ...` as `{NAME: VALUE}` (a malformed one: an `InputError`)."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            if not (sep and name.strip()):
+                raise ValueError
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise InputError(f"--fix {item}: not NAME=VALUE with a number for VALUE; write "
+                             "e.g. --fix Xw=0") from None
+    return out
+
+
+def fixed_model(name: str, fixed: dict[str, float]):
+    """The model `name` (`lon`, `lat`) with the parameters of `fixed` held at their values:
+    `model.with_params(fixed).with_free(free minus fixed)`; a name that is not free: an
+    `InputError` listing the free ones."""
+    from fwid.identification._cycle_averaged import get_model
+
+    model = get_model(name)
+    if not fixed:
+        return model
+    unknown = [k for k in fixed if k not in model.free]
+    if unknown:
+        raise InputError(f"--fix {', '.join(unknown)}: not a free parameter of the {name} "
+                         f"model; the free ones are {', '.join(model.free)}")
+    return model.with_params(fixed).with_free([k for k in model.free if k not in fixed])
+
+
 def identify(args) -> int:
     t0 = time.perf_counter()
     window = window_of(args)
@@ -57,6 +88,12 @@ def identify(args) -> int:
                          f"--method {method}; drop them, or fit by output error")
     args.method = method
     args.prior_values, args.bounds_values = prior, bounds
+    args.fixed = _fixed(getattr(args, "fix", None) or [])
+    noise = getattr(args, "noise", None)
+    for flag, given in (("--noise", noise is not None), ("--fix", bool(args.fixed))):
+        if given and args.model not in ("lon", "lat"):
+            raise InputError(f"{flag} applies to --model lon or lat, not {args.model}; drop it")
+    args.noise = noise or "auto"
     vehicle = args.model if args.model in VEHICLE_MODELS else None
     require = [c for c in IDENTIFY_COLUMNS[args.model] if c != CONTROLS.get(args.model)]
     train, held_out = read_sets(args.data, args.validate, require=require, vehicle_for=vehicle,
@@ -128,18 +165,19 @@ def _cycle_averaged(args, flights, validate):
     from fwid.report import (identification_summary, joint_report, joint_summary,
                              plot_fits_overview, spread_table)
 
-    ident = fwid.identify(flights, args.model, validate=validate, joint=args.joint,
+    model = fixed_model(args.model, args.fixed)
+    ident = fwid.identify(flights, model, validate=validate, joint=args.joint,
                           cutoff=args.cutoff, progress=not args.quiet,
                           prior=args.prior_values, bounds=args.bounds_values,
-                          method=args.method)
+                          method=args.method, noise=args.noise)
     report = {**fwid.identification_report(ident), "method": args.method}
     parts = []
     comparison = None
     if args.joint and validate and len(flights) > 1:  # does sharing pay off?
-        comparison = fwid.compare_joint(flights, args.model, validate=validate, joint=ident,
+        comparison = fwid.compare_joint(flights, model, validate=validate, joint=ident,
                                         cutoff=args.cutoff, progress=not args.quiet,
                                         prior=args.prior_values, bounds=args.bounds_values,
-                                        method=args.method)
+                                        method=args.method, noise=args.noise)
         report["joint_vs_individual"] = joint_report(comparison)
         spread = report["joint_vs_individual"]["modes"]["individual_spread"]
         parts += ["\n" + joint_summary(comparison),

@@ -119,15 +119,23 @@ def parser() -> argparse.ArgumentParser:
                    help="lon/lat: one overview of all flights' fits (the worst and best few "
                    "when many) and the poles (summary), plus one figure per flight (all), or "
                    "none; flap/combined: their figures (summary, all) or none")
-    i.add_argument("--method", choices=("output-error", "multiple-shooting", "filter-error",
-                                        "equation-error"),
+    i.add_argument("--method", choices=("output-error", "equation-error", "multiple-shooting",
+                                        "filter-error"),
                    default="output-error",
-                   help="lon/lat: the estimator: output error (the paper's), multiple shooting "
-                   "(an unstable vehicle: the simulation restarts from the measured states "
-                   "every few samples), filter error (process noise, closed-loop flights: "
-                   "a Kalman filter in the likelihood) or equation error (least squares of "
-                   "the reconstructed loads on the measured states: no simulation, the start "
-                   "for an unstable vehicle flown in closed loop)")
+                   help="lon/lat: the estimator: output error (the paper's), equation error "
+                   "(least squares of the reconstructed loads on the states: no simulation, "
+                   "where an unstable vehicle flown in closed loop is begun), multiple "
+                   "shooting (an unstable vehicle: the simulation restarts from the measured "
+                   "states every few samples) or filter error (process noise, closed-loop "
+                   "flights: a Kalman filter in the likelihood; both start from equation "
+                   "error)")
+    i.add_argument("--noise", choices=("auto", "full", "diagonal"), default=None,
+                   help="lon/lat: the measurement-noise covariance R: full, diagonal "
+                   "(uncorrelated output noise), or auto (default: full, replaced by "
+                   "diagonal where the full one fails)")
+    i.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
+                   help="lon/lat: hold parameter NAME at VALUE instead of estimating it "
+                   "(repeat for several), e.g. --fix Xw=0")
     i.add_argument("--prior", default=None, metavar="PRIOR.json",
                    help="lon/lat: a Gaussian prior on parameters, {\"Mq\": {\"mean\": .., "
                    "\"std\": ..}, ..}, or an earlier report.json (its parameters and std): "

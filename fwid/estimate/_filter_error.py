@@ -49,6 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .._advice import advise
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment, stack_experiments
@@ -353,12 +354,13 @@ def fit_filter_error(
         residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
         F=jnp.abs(theta[p:]), K=out["K"], P=out["P"], innovations=v,
         whiteness=whiteness(v, batch.mask, model.outputs), outer=outer)
-    found = fit_warnings(res, names, max_steps, information=out["M"])
+    found = fit_warnings(res, names, max_steps, information=out["M"], method="filter-error")
     found = [w for w in found if "strongly coloured" not in w]  # the filter handles colour
     if not res.white:
         bad = [k for k, w in res.whiteness.items() if not w["white"]]
         found.append(f"{', '.join(names)}: the {model.name} filter-error innovations are not "
-                     f"white ({', '.join(bad)}): a missing effect rather than process noise")
+                     f"white ({', '.join(bad)}): a missing effect rather than process noise; "
+                     f"next: {advise('model-error', 'filter-error')}")
     res = dataclasses.replace(res, warnings=tuple(found))
     issue(res.warnings, stacklevel=4)
     if progress:

@@ -65,7 +65,7 @@ def choose(full, diagonal, reason: str, flights) -> object:
         return dataclasses.replace(full, warnings=(*full.warnings, note))
     note = (f"{', '.join(flights)}: the {full.model.name} fit with a full R {reason}; the "
             "estimates are those of a diagonal R, which converged; "
-            f"{advice('full-noise')} keeps the full R")
+            f"{advice('noise-full')} keeps the full R")
     return dataclasses.replace(diagonal, warnings=(note, *diagonal.warnings))
 
 

@@ -17,7 +17,7 @@ from ..simulation._buckets import bucket_length, pad_experiment
 from ..simulation._experiment import Experiment, stack_experiments
 from ..simulation._simulate import simulate, simulate_sensitivities
 from . import _exported as exported
-from .._advice import advice
+from .._advice import advise
 from ._colour import colour_at_bandwidth
 from ._gauss_newton import NoiseModel, solve_relaxed
 from ._noise import check_noise, fall_back
@@ -249,8 +249,8 @@ def _result(model, start_model, theta0, out, names, n_local, max_steps=None,
     if not (np.isfinite(float(out["cost"])) and bool(out["finite"])):
         raise FitDivergedError(
             f"{', '.join(names)}: the {model.name} fit diverged (the simulation blows up for "
-            "every step tried from the start values); check the units and the trim, or "
-            f"{advice('start')}"
+            "every step tried from the start values; check the units and the trim); next: "
+            f"{advise('diverged', 'output-error')}"
         )
     check_information(out, free_names, names)
     result = FitResult(

@@ -20,7 +20,7 @@ from .._errors import ExcitationError
 from ..models._greybox import GreyBoxModel
 from ..simulation._checks import check_experiment
 from ..simulation._experiment import Experiment
-from .._advice import advice
+from .._advice import advise
 from ._prior import PriorBounds
 from ._start import least_squares_start
 
@@ -189,15 +189,15 @@ def check_excitation(model: GreyBoxModel, exps: Sequence[Experiment], names: Seq
             )
 
 
-def check_information(result, names, flights):
+def check_information(result, names, flights, method: str = "output-error"):
     M = np.asarray(result["M"])
     d = np.sqrt(np.clip(np.diag(M), 0, None))
     bad = [names[i] for i in range(len(names)) if not np.isfinite(d[i]) or d[i] <= 1e-10 * d.max()]
     if bad:
         raise ExcitationError(
             f"{', '.join(flights)}: the data carry no information on parameter"
-            f"{'s' if len(bad) > 1 else ''} {', '.join(bad)} (too little excitation); fix "
-            f"them ({advice('fix')}) or add flights whose inputs excite them",
+            f"{'s' if len(bad) > 1 else ''} {', '.join(bad)} (too little excitation); next: "
+            f"{advise('no-information', method, bad[0])}",
             parameters=bad,
         )
 

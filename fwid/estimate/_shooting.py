@@ -278,7 +278,8 @@ def fit_shooting(
             lag1=jnp.max(jax.vmap(lag1_autocorrelation)(v, mask), axis=0),
             residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)))
         M = lin["H"][:p, :p]
-        return dataclasses.replace(res, warnings=tuple(fit_warnings(res, names, max_steps, M)))
+        return dataclasses.replace(res, warnings=tuple(fit_warnings(res, names, max_steps, M,
+                                                                   method="multiple-shooting")))
 
     if noise != "auto":
         result = run(noise == "diagonal")

@@ -19,7 +19,7 @@ import equinox as eqx
 import numpy as np
 
 from ..models._greybox import GreyBoxModel
-from .._advice import advice
+from .._advice import advise
 
 #: Warn when the fastest unstable mode grows more than this factor over the record.
 GROWTH_MAX = 100.0
@@ -56,6 +56,5 @@ def instability_warning(model: GreyBoxModel, exps: Sequence, flights: Sequence[s
             f"grows {np.exp(lam * T):.3g}-fold over the {T:.3g} s record, so output error "
             "diverges from the data for all but the exact parameters and x0 and can settle "
             "on a wrong stable model; trust the estimates only if the residuals are small and "
-            "white; otherwise fit shorter records, or use a method that keeps the simulation "
-            f"near the data: {advice('multiple-shooting')}, or {advice('filter-error')} "
-            "with process noise")
+            "white; otherwise use a method that keeps the simulation near the data, next: "
+            f"{advise('unstable', 'output-error')}")

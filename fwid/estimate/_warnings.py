@@ -19,7 +19,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._errors import FitWarning
-from .._advice import advice
+from .._advice import advise
 
 #: R whose correlation form (unit diagonal, so independent of the outputs' units) has a larger
 #: condition number is reported as ill-conditioned.
@@ -108,10 +108,12 @@ def model_error_signature(result) -> tuple[float, str, str, str, float] | None:
 
 
 def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
-                 information: Float[ArrayLike, "p p"] | None = None) -> list[str]:
+                 information: Float[ArrayLike, "p p"] | None = None,
+                 method: str = "output-error") -> list[str]:
     """The warnings of one fit (a [`fwid.FitResult`][]), each a sentence that names the
-    flights, what is wrong and what to try. `information`: the Fisher information matrix at
-    the estimate, to name the parameters that cannot be separated when it is singular."""
+    flights, what is wrong and the one step to take next (`fwid._advice.NEXT` for `method`,
+    the estimator that made the fit). `information`: the Fisher information matrix at the
+    estimate, to name the parameters that cannot be separated when it is singular."""
     who = f"{', '.join(flights)}: the {result.model.name} fit"
     out = []
     # parameters at an active bound have no std (NaN by design, `FitResult.active`)
@@ -120,12 +122,12 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
             else np.asarray(active) == 0)
     if not (np.all(np.isfinite(np.asarray(result.theta)))
             and np.isfinite(float(result.cost))):
-        out.append(f"{who} diverged: the simulation or the estimate is not finite; check the "
-                   "units, the trim and the start values")
+        out.append(f"{who} diverged: the simulation or the estimate is not finite (check "
+                   f"the units and the trim); next: {advise('diverged', method)}")
     elif not np.all(np.isfinite(np.asarray(result.std)[free])):
         out.append(f"{who} has non-finite standard deviations (the simulation or the "
                    "information matrix is not finite at the estimate): the uncertainty "
-                   "cannot be trusted")
+                   f"cannot be trusted; next: {advise('diverged', method)}")
     if not bool(result.converged):
         cap = f" (max_steps={max_steps})" if max_steps is not None else ""
         steps = int(result.steps)
@@ -133,47 +135,46 @@ def fit_warnings(result, flights: Sequence[str], max_steps: int | None = None,
             out.append(f"{who} did not converge: it stopped after {steps} Gauss-Newton "
                        f"step{'s' if steps != 1 else ''}{cap} because no shorter step "
                        "lowered the cost (a flat or ragged likelihood there); the estimates "
-                       f"may be far from the optimum; try {advice('diagonal-noise')} or "
-                       "better start values")
+                       f"may be far from the optimum; next: {advise('not-converged', method)}")
         else:
             out.append(f"{who} did not converge in {steps} Gauss-Newton "
                        f"step{'s' if steps != 1 else ''}{cap}: "
-                       f"the estimates may be far from the optimum; {advice('max-steps')}, "
-                       f"try {advice('diagonal-noise')} or better start values")
+                       "the estimates may be far from the optimum; next: "
+                       f"{advise('not-converged', method)}")
     cond = r_condition(result.R)
     if cond > R_COND_MAX:
         out.append(f"{who}: the noise covariance R is ill-conditioned (condition number "
                    f"{cond:.3g} in correlation form): outputs are nearly linearly dependent "
-                   f"or noise-free; try {advice('diagonal-noise')}")
+                   f"or noise-free; next: {advise('ill-conditioned', method)}")
     mark = model_error_signature(result)
     if mark is not None:
         colour, out_k, a, b, c = mark
         out.append(f"{who}: the residuals are strongly coloured (autocorrelation "
                    f"{colour:.3f} on {out_k} at the data's bandwidth) and correlated "
                    f"between outputs ({a} and {b}: "
-                   f"{c:+.2f}): process noise or a missing effect, not measurement noise; "
-                   "check the model for missing terms; with process noise (turbulence) "
-                   "output-error estimates are biased (fit with "
-                   f"{advice('filter-error')}, a Kalman filter in the likelihood, whose innovations should be white); the "
-                   "standard deviations `std` allow for the colour, `std_cr` does not")
+                   f"{c:+.2f}): process noise or a missing effect, not measurement noise "
+                   "(process noise biases output error); "
+                   "the standard deviations `std` allow for the colour, `std_cr` does not; "
+                   f"next: {advise('model-error', method)}")
     pairs = correlated_pairs(result.corr, result.names)
     corr_free = np.asarray(result.corr)[np.ix_(free, free)]
     if not pairs and information is not None and not np.all(np.isfinite(corr_free)):
-        out.append(_singular(who, information, result.names))
+        out.append(_singular(who, information, result.names, method))
     elif pairs:
         listed = ", ".join(f"{a} and {b} ({c:+.4f})" for a, b, c in pairs[:5])
         more = f" and {len(pairs) - 5} more" if len(pairs) > 5 else ""
         out.append(f"{who}: parameters nearly unidentifiable, correlated beyond {CORR_MAX}: "
-                   f"{listed}{more}; fix one of each pair ({advice('fix')}) or add "
-                   "flights whose inputs separate them")
+                   f"{listed}{more}; fix one of each pair, next: "
+                   f"{advise('singular', method, pairs[0][0])}")
     return out
 
 
-def _singular(who: str, M, names: Sequence[str]) -> str:
+def _singular(who: str, M, names: Sequence[str], method: str = "output-error") -> str:
     """The warning of a fit whose information matrix `M` is singular to working precision
     (no covariance, no correlation of the estimates): the pairs whose sensitivities are
     collinear, else the parameters of the direction `M` does not know."""
     pairs = collinear_pairs(M, names)
+    first = pairs[0][0] if pairs else (unidentifiable(M, names) or ["NAME"])[0]
     if pairs:
         listed = ", ".join(f"{a} and {b} ({c:+.4f})" for a, b, c in pairs[:5])
         more = f" and {len(pairs) - 5} more" if len(pairs) > 5 else ""
@@ -183,8 +184,8 @@ def _singular(who: str, M, names: Sequence[str]) -> str:
         which = ("the data do not fix a combination of "
                  + ", ".join(unidentifiable(M, names)[:6]))
     return (f"{who}: the information matrix is singular (to working precision), so the "
-            f"estimates have no covariance and no correlation: {which}; fix some of them "
-            f"({advice('fix')}) or add flights whose inputs separate them")
+            f"estimates have no covariance and no correlation: {which}; fix some of them, "
+            f"next: {advise('singular', method, first)}")
 
 
 #: Set (in this thread or task only) by `quiet_fits`.

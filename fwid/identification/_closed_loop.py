@@ -32,7 +32,7 @@ import numpy as np
 from scipy import signal, stats
 
 from ..data._flight import Flight
-from .._advice import advice
+from .._advice import advise
 
 #: The recorded controls tested: an input a model derives from them (the diagnosis's filtered
 #: deflection `de_eff`, say) follows the states through the recorded one by construction.
@@ -116,5 +116,5 @@ def closed_loop_warning(tests: Sequence[ClosedLoop | None], model_name: str) -> 
     return (f"{which}: the control follows the states (closed loop: the states' past "
             "explains that share of the control beyond its own past); output error is "
             f"biased there, as the control carries the disturbances the simulation does not "
-            f"see; fit the {model_name} model with {advice('filter-error')} (or "
-            f"{advice('multiple-shooting')}), which are not")
+            f"see; fit the {model_name} model with a method that is not: "
+            f"{advise('closed-loop', 'output-error')}")

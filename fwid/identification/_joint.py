@@ -73,6 +73,7 @@ def compare_joint(
     prior=None,
     bounds=None,
     method: str = "output-error",
+    noise: str = "auto",
 ) -> JointComparison:
     """Fit `model` to `flights` jointly and one by one, and score both on `validate`.
 
@@ -96,7 +97,7 @@ def compare_joint(
         raise InputError("comparing a joint fit with individual fits needs held-out flights "
                          "(validate=...)")
     kw = dict(validate=validate, cutoff=cutoff, noise_cutoff=noise_cutoff, progress=progress,
-              prior=prior, bounds=bounds, method=method)
+              prior=prior, bounds=bounds, method=method, noise=noise)
     joint = joint or identify(flights, model, joint=True, **kw)
     individual = individual or identify(flights, model, joint=False, **kw)
     outputs = list(joint.model.outputs)

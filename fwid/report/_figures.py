@@ -13,6 +13,7 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from ._bounded import clip_to_measured, drawable
 from ._numbers import compact
 
 _DEG = {"q", "p", "r", "theta", "phi", "psi", "alpha", "de", "dr"}
@@ -40,7 +41,8 @@ def plot_flight_fit(flight_fit, *, path: str | Path | None = None, title: str = 
     The scaled input is drawn with every signal, and under each signal its residual
     (measured - model), where the model misses. States are perturbations from the trim,
     angles and rates in degrees for reading (the reports and tables are in radians); forces
-    and moments in N and N m.
+    and moments in N and N m. A simulation that diverged (`fwid.report._bounded`) is drawn
+    within the measured range, its axis kept there, and marked where it diverged.
 
     **Arguments:**
 
@@ -76,13 +78,14 @@ def plot_flight_fit(flight_fit, *, path: str | Path | None = None, title: str = 
             k = group[row]
             zm, ys = _display(k, meas[k]), _display(k, sim[k])
             ax.plot(t, zm, color="0.2", lw=1.0, label=label)
-            ax.plot(t, ys, color="C3", lw=1.2, ls="--", label="Model")
+            ax.plot(t, drawable(t, zm, ys), color="C3", lw=1.2, ls="--", label="Model")
             ax.plot(t, _scaled_input(u_disp, zm), color="C0", lw=0.8, alpha=0.6, label=u_label)
             unit = _UNITS.get(k, "")
             ax.set_ylabel(f"\u0394{k} [{unit}]" if unit else f"\u0394{k}")
-            res.plot(t, zm - ys, color="C3", lw=0.8)
+            res.plot(t, zm - drawable(t, zm, ys), color="C3", lw=0.8)
             res.axhline(0, color="0.6", lw=0.5)
             res.set_ylabel("resid.", fontsize=7)
+            clip_to_measured(ax, t, zm, ys, residual_ax=res)
             m = flight_fit.metrics.get(k)
             if m:
                 ax.text(0.99, 0.95, f"corr {compact(m['corr'])}  R2 {compact(m['r2'])}", ha="right",

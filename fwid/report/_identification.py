@@ -7,13 +7,15 @@ import numpy as np
 
 from ..validate._metrics import fit_metrics
 from ..validate._modes import eigenvalues, modes
+from ._bounded import mark_diverged, with_identifiable
 
 
 def parameters(fit, names=None) -> dict:
-    """A fit's parameter table (`value`, `std`, ...), the per-flight `@i` terms left out."""
+    """A fit's parameter table (`value`, `std`, ..., `identifiable`), the per-flight `@i`
+    terms left out."""
     table = fit.table()
     keep = names if names is not None else [k for k in fit.names if "@" not in k]
-    return {k: table[k] for k in keep if k in table}
+    return with_identifiable({k: table[k] for k in keep if k in table})
 
 
 def eig_list(eigs) -> list:
@@ -63,7 +65,7 @@ def _fit_block(ident, fit, estimation, eigs):
         "parameters": parameters(fit),
         "eigenvalues": eig_list(eigs),
         "modes": modes(eigs),
-        "metrics": {"estimation": estimation.metrics},
+        "metrics": {"estimation": mark_diverged(estimation.metrics, [estimation])},
         "local_parameters": estimation.local_params,
         "correlation": {"names": list(fit.names), "matrix": np.asarray(fit.corr)},
         "fit": fit_info(fit, ident.model.outputs),
@@ -94,7 +96,8 @@ def prior_and_bounds(fits, flights=None) -> dict:
 
 
 def pooled_metrics(flight_fits) -> dict:
-    """Metrics over several flights' samples pooled together (outputs and forces)."""
+    """Metrics over several flights' samples pooled together (outputs and forces), with
+    when a flight's simulation diverged (`fwid.report._bounded.mark_diverged`) where one did."""
     if not flight_fits:
         return {}
     names = list(flight_fits[0].metrics)
@@ -102,7 +105,7 @@ def pooled_metrics(flight_fits) -> dict:
                         for f in flight_fits])
     y = np.concatenate([np.stack([{**f.simulated, **f.forces_simulated}[k] for k in names], -1)
                         for f in flight_fits])
-    return fit_metrics(z, y, names)
+    return mark_diverged(fit_metrics(z, y, names), flight_fits)
 
 
 def modes_spread(per_flight_modes: list[list[dict]]) -> dict:
@@ -136,7 +139,8 @@ def add_validation(report: dict, validation) -> dict:
     if validation:
         report["metrics"]["validation"] = pooled_metrics(validation)
         report["validation_flights"] = [
-            {"flight": v.name, "metrics": v.metrics, "local_parameters": v.local_params}
+            {"flight": v.name, "metrics": mark_diverged(v.metrics, [v]),
+             "local_parameters": v.local_params}
             for v in validation
         ]
     return report
@@ -190,12 +194,12 @@ def identification_report(ident) -> dict:
         report["per_flight"] = per
         names = [k for k in model.free]
         vals = np.array([[p["parameters"][k]["value"] for k in names] for p in per])
-        report["parameters"] = {
+        report["parameters"] = with_identifiable({
             k: {"value": float(vals[:, i].mean()),
                 "std": float(vals[:, i].std(ddof=1)) if len(per) > 1 else None,
                 "spread_over_flights": True}
             for i, k in enumerate(names)
-        }
+        })
         report["summary"] = ("top-level parameters are the mean over the per-flight fits; "
                              "their std is the spread (sample std) across flights")
         report["modes_spread"] = modes_spread([p["modes"] for p in per])

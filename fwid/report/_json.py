@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._bounded import identifiable
+
 
 def _clean(obj):
     """JSON-safe: numpy scalars/arrays to Python, NaN/inf to None."""
@@ -74,14 +76,20 @@ def write_json(path: str | Path, obj) -> Path:
 def parameters_csv(parameters: dict) -> str:
     """The `parameters.csv` beside `report.json`: one row per parameter with `value`, `std`
     (Cramer-Rao corrected for coloured residuals, or the spread over flights), `std_cr`
-    (plain Cramer-Rao) and `rel_std_pct` (`100 |std / value|`); empty where not known."""
+    (plain Cramer-Rao), `rel_std_pct` (`100 |std / value|`) and `identifiable` (`true`,
+    `false` when the std exceeds the value a thousandfold or is not finite:
+    `fwid.report._bounded.identifiable`); empty where not known, and the three spreads empty
+    where the parameter is not identifiable (`report.json` keeps them)."""
 
     def cell(x):
         return "" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.10g}"
 
-    rows = ["name,value,std,std_cr,rel_std_pct"]
+    rows = ["name,value,std,std_cr,rel_std_pct,identifiable"]
     for name, p in parameters.items():
         v, sd = p.get("value"), p.get("std")
         rel = 100.0 * abs(sd / v) if (v not in (None, 0) and sd is not None) else None
-        rows.append(",".join([name, cell(v), cell(sd), cell(p.get("std_cr")), cell(rel)]))
+        ok = identifiable(v, sd)
+        spreads = [sd, p.get("std_cr"), rel] if ok is not False else [None] * 3
+        rows.append(",".join([name, cell(v), *map(cell, spreads),
+                              "" if ok is None else str(ok).lower()]))
     return "\n".join(rows) + "\n"

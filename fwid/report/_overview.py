@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ._figures import _UNITS, _display, _scaled_input
+from ._bounded import clip_to_measured, drawable
 from ._numbers import compact
 
 
@@ -36,7 +37,8 @@ def plot_fits_overview(fits: Sequence, *, path: str | Path | None = None, title:
     """Measured vs model for a batch of flight fits in one grid: a row per flight (all of
     them up to `most`, else the worst and best few by mean R2), a column per output, the
     scaled input behind; each row says the flight, its part (`parts[i]`, e.g. "estimation")
-    and its mean R2. States as in [`fwid.plot_flight_fit`][] (perturbations, degrees)."""
+    and its mean R2. States as in [`fwid.plot_flight_fit`][] (perturbations, degrees); a
+    simulation that diverged is kept to the measured range and marked where it did."""
     parts = list(parts) if parts is not None else [""] * len(fits)
     part_of = {id(f): p for f, p in zip(fits, parts)}
     rows = overview_rows(list(fits), most)
@@ -53,7 +55,8 @@ def plot_fits_overview(fits: Sequence, *, path: str | Path | None = None, title:
             zm, ys = _display(k, ff.measured[k]), _display(k, ff.simulated[k])
             ax.plot(ff.t, _scaled_input(u_disp, zm), color="C0", lw=0.6, alpha=0.5)
             ax.plot(ff.t, zm, color="0.2", lw=0.8)
-            ax.plot(ff.t, ys, color="C3", lw=0.9, ls="--")
+            ax.plot(ff.t, drawable(ff.t, zm, ys), color="C3", lw=0.9, ls="--")
+            clip_to_measured(ax, ff.t, zm, ys)
             ax.tick_params(labelsize=6)
             if i == 0:
                 unit = _UNITS.get(k, "")

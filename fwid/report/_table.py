@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._bounded import NOT_IDENTIFIABLE, STD_OVER_VALUE_MAX, identifiable
 from ._numbers import fixed, score
 
 
@@ -19,8 +20,12 @@ def _chunks(seq, n):
 
 
 def parameter_table(params: dict, *, columns: int = 3) -> str:
-    """Table 1's layout: `param  value  |sigma|  100|sigma/value|`, in `columns` groups."""
+    """Table 1's layout: `param  value  |sigma|  100|sigma/value|`, in `columns` groups; a
+    parameter that is not identifiable (`fwid.report._bounded.identifiable`) shows that
+    instead of its numbers, named in a line below the table."""
     names = list(params)
+    lost = [k for k in names
+            if identifiable(params[k].get("value"), params[k].get("std")) is False]
     groups = _chunks(names, columns)
     head = "  ".join(f"{'param':<8}{'value':>11}{'|sigma|':>10}{'100|s/v|':>9}" for _ in groups)
     lines = [head, "-" * len(head)]
@@ -30,6 +35,9 @@ def parameter_table(params: dict, *, columns: int = 3) -> str:
             if r < len(g):
                 k = g[r]
                 p = params[k]
+                if k in lost:
+                    cells.append(f"{k:<8}{'not identifiable':>30}")
+                    continue
                 std = p.get("std")
                 rel = 100 * abs(std / p["value"]) if std is not None and p["value"] else float("nan")
                 std = float("nan") if std is None else std
@@ -37,16 +45,27 @@ def parameter_table(params: dict, *, columns: int = 3) -> str:
             else:
                 cells.append(" " * 38)
         lines.append("  ".join(cells).rstrip())
+    if lost:
+        which = (f"all {len(names)} parameters" if len(lost) == len(names)
+                 else ", ".join(lost))
+        lines.append(f"{NOT_IDENTIFIABLE}: {which} (|sigma| above "
+                     f"{STD_OVER_VALUE_MAX:.0f} |value|, or not finite; the numbers are in "
+                     "report.json)")
     return "\n".join(lines)
 
 
 def metrics_table(metrics: dict, title: str = "") -> str:
     """Table 2's layout: output correlation, R^2, RMS (in the output's SI unit) and RMS as %
     of the output's measured range, per output; every number in a bounded width (an R2 far
-    below zero as `<-1e3`, see `_numbers.py`)."""
+    below zero as `<-1e3`, see `_numbers.py`); an output whose simulation diverged
+    (`diverged_at_s`, `fwid.report._bounded.mark_diverged`) says when instead."""
     lines = [title] if title else []
     lines.append(f"{'output':<8}{'corr':>7}{'R2':>8}{'RMS':>11} {'unit':<6}{'% range':>8}")
     for k, m in metrics.items():
+        if m.get("diverged_at_s") is not None:
+            where = f" ({m['diverged_in']})" if m.get("diverged_in") else ""
+            lines.append(f"{k:<8}  simulation diverged at t = {m['diverged_at_s']:.3g} s{where}")
+            continue
         lines.append(f"{k:<8}{score(m['corr'], 7)}{score(m['r2'], 8)}{m['rms']:>11.3e} "
                      f"{SI_UNITS.get(k, ''):<6}{fixed(m['rms_pct'], 8)}")
     return "\n".join(lines)

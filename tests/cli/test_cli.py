@@ -308,8 +308,8 @@ def test_identify_exits_1_when_no_flight_converged(flights, tmp_path, monkeypatc
     note = "WARNING: lon_0.csv: the lon fit did not converge in 1 Gauss-Newton step"
     assert captured.out.count(note) == 1  # once, one line, no source location
     assert "UserWarning" not in captured.out + captured.err
-    # advice in the command line's terms: no option for the noise model, so the Python call
-    assert "try the Python call fwid.fit(..., noise='diagonal')" in captured.out
+    # advice in the command line's terms: the one next step, an option of fwid identify
+    assert "next: --method multiple-shooting" in captured.out and "fwid.fit" not in captured.out
     report = json.loads((tmp_path / "report.json").read_text())  # still written
     assert report["fit"]["converged"] is False
     assert any("did not converge" in w for w in report["warnings"])

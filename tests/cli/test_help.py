@@ -32,7 +32,8 @@ def test_design_is_summarised_by_its_default_criterion(capsys):
     assert "--criterion {variances,d-optimal}" in design
 
 
-def test_identify_offers_the_three_methods(capsys):
+def test_identify_offers_the_methods_the_noise_models_and_fix(capsys):
     flat = " ".join(_help(capsys, "identify").split())
-    assert "--method {output-error,multiple-shooting,filter-error}" in flat
+    assert "--method {output-error,equation-error,multiple-shooting,filter-error}" in flat
+    assert "--noise {auto,full,diagonal}" in flat and "--fix NAME=VALUE" in flat
     assert "(default: output-" in flat  # argparse may wrap at the hyphen

@@ -8,13 +8,6 @@ import pytest
 from fwid.cli import main
 
 
-@pytest.fixture(scope="module")
-def flight(tmp_path_factory):
-    out = tmp_path_factory.mktemp("flights")
-    assert main(["simulate", str(out), "--flights", "1", "--seed", "4", "--duration", "2.5"]) == 0
-    return out / "lon_0.csv"
-
-
 def _edited(flight, tmp_path, edit):
     rows = list(csv.reader(flight.read_text().splitlines()))
     head, body = edit(rows[0], rows[1:])

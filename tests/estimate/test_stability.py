@@ -30,7 +30,7 @@ def test_growth_is_the_largest_real_eigenvalue_and_the_warning_needs_a_long_enou
     assert instability_warning(m, [_exp(short)], ["s"]) is None
     note = instability_warning(m, [_exp(12.5)], ["f1"])
     assert note.startswith("f1: the lin model identified is unstable")
-    assert f"eigenvalue {lam:+.3g} 1/s" in note and "method='filter-error'" in note
+    assert f"eigenvalue {lam:+.3g} 1/s" in note and note.endswith("next: fwid.fit(..., method='multiple-shooting')")
     assert f"{np.exp(lam * 12.5):.3g}-fold over the 12.5 s record" in note
 
 
