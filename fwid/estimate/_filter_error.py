@@ -12,11 +12,13 @@ simulation)
 with the steady-state gain of the model linearised at the experiment's initial state and
 first input (Eqs. 5.50-5.51; exact for a linear model), `P` from the Riccati equation of
 `fwid.estimate._riccati` with the process-noise distribution matrix `F` (diagonal, one entry
-per state, estimated with the parameters). The gain is the discrete corrector's
-`K = P C^T (C P C^T + R)^-1`: the book's `K = P C^T R^-1` (Eq. 5.48) to first order in
-`P / R`, and, unlike it, never beyond one where the process noise over a sample outweighs
-the innovations (`F^2 dt > R`: accurate cycle-averaged data of an unstable vehicle), where
-the book's gain over-corrects every sample and the filter diverges.
+per state, estimated with the parameters). The gain is the book's `K = P C^T R^-1` (Eq.
+5.48). Where the process noise over a sample outweighs the innovations (`F^2 dt > R`:
+accurate cycle-averaged data of an unstable vehicle), that gain exceeds one, over-corrects
+every sample and the relaxation does not settle; where it does not, the fit is run again
+with the discrete corrector's gain `K = P C^T (C P C^T + R)^-1`, the book's to first order in
+`P / R` and never beyond one, and kept if it converges (`FilterErrorResult.gain` says which
+gain the estimates come from; `gain=` chooses one).
 
 The start (with `start="least-squares"`, for a model whose states are measured) is the
 equation-error estimate and its residual covariance (`fwid.estimate._equation_error`): the
@@ -83,6 +85,7 @@ class FilterErrorResult(FitResult):
       1..[`WHITENESS_LAGS`][] outside the 95 % band `+-1.96/sqrt(N)`, the largest one, and
       `"white"` (at most [`WHITENESS_OUTSIDE_MAX`][] outside); see [`whiteness`][].
     - `outer`: the relaxation passes (R updates with F compensation).
+    - `gain`: the gain used, `"book"` (Eq. 5.48) or `"bounded"` (see the module docstring).
     """
 
     F: Float[Array, " nx"] | None = None
@@ -91,6 +94,7 @@ class FilterErrorResult(FitResult):
     innovations: Float[Array, "b n ny"] | None = None
     whiteness: dict | None = eqx.field(static=True, default=None)
     outer: int = eqx.field(static=True, default=0)
+    gain: str = eqx.field(static=True, default="book")
 
     @property
     def white(self) -> bool:
@@ -117,16 +121,18 @@ def whiteness(nu, mask, outputs: Sequence[str], lags: int = WHITENESS_LAGS) -> d
     return out
 
 
-def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment, gain: bool = True):
-    """The innovations of one experiment (Eqs. 5.45-5.47) and the filter's `K`, `P`, `C`
-    (with `gain=False`, `K = 0`: the output-error residuals)."""
+def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment, gain: str = "book"):
+    """The innovations of one experiment (Eqs. 5.45-5.47) and the filter's `K`, `P`, `C`;
+    `gain`: `"book"` (Eq. 5.48), `"bounded"` (the discrete corrector's) or `"none"` (`K = 0`:
+    the output-error residuals)."""
     u0 = e.u[0]
     A = jax.jacfwd(model.f, argnums=0)(e.x0, u0, params, e.consts)  # Eq. (5.50)
     C = jax.jacfwd(model.h, argnums=0)(e.x0, u0, params, e.consts)  # Eq. (5.51)
     dt = e.t[1] - e.t[0]
-    _, P = steady_state_gain(A, C, jnp.diag(fdiag**2), Rk, dt)
-    K = jnp.linalg.solve(C @ P @ C.T + Rk, C @ P).T  # bounded: see the module docstring
-    if not gain:
+    K, P = steady_state_gain(A, C, jnp.diag(fdiag**2), Rk, dt)
+    if gain == "bounded":  # see the module docstring
+        K = jnp.linalg.solve(C @ P @ C.T + Rk, C @ P).T
+    if gain == "none":
         K, P = jnp.zeros_like(K), jnp.zeros_like(P)
     u_next = jnp.concatenate([e.u[1:], e.u[-1:]], axis=0)
 
@@ -140,7 +146,7 @@ def _filter(model: GreyBoxModel, params, fdiag, Rk, e: Experiment, gain: bool = 
     return nus, K, P, C
 
 
-def _innovations(model, theta, Rk, batch, p, gain=True, n_local=0):
+def _innovations(model, theta, Rk, batch, p, gain="book", n_local=0):
     """The innovations of every experiment of `batch` (`theta`: the free parameters, with
     `n_local` values of each local one, one per experiment, when `n_local > 0`, then F)."""
     if n_local == 0:
@@ -152,20 +158,21 @@ def _innovations(model, theta, Rk, batch, p, gain=True, n_local=0):
 
 
 @eqx.filter_jit
-def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol, n_local=0):
+def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol, n_local=0,
+           gain="book"):
     """Gauss-Newton on the parameters and F for the gain's innovation covariance `Rk`."""
     noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
 
     def residuals_and_jacobian(theta):
         def nus(th):
-            return _innovations(model, th, Rk, batch, p, n_local=n_local)[0]
+            return _innovations(model, th, Rk, batch, p, gain, n_local=n_local)[0]
         # one trace of the filter for the innovations and their Jacobian
         eye = jnp.eye(theta.shape[0], dtype=theta.dtype)
         return jax.vmap(lambda t: jax.jvp(nus, (theta,), (t,)), out_axes=(None, -1))(eye)
 
     sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
                         max_steps=max_steps)
-    _, K, P, C = _innovations(model, sol.theta, Rk, batch, p, n_local=n_local)
+    _, K, P, C = _innovations(model, sol.theta, Rk, batch, p, gain, n_local=n_local)
     Sw = sol.whitened()[1].reshape(-1, sol.theta.shape[0])
     return dict(theta=sol.theta, R=sol.R, v=sol.v, M=Sw.T @ Sw, cost=sol.cost,
                 steps=sol.steps, accepted=sol.accepted, converged=sol.converged, K=K[0],
@@ -175,7 +182,7 @@ def _inner(model, theta0, batch, Rk, *, p, diagonal, max_steps, rtol, cost_rtol,
 @eqx.filter_jit
 def _output_error_r(model, theta, batch, p, diagonal, n_local=0):
     """R (Eq. 11) of the residuals with `K = 0` (F = 0): the book's initial R (Sec. 5.6)."""
-    v = _innovations(model, theta, jnp.eye(batch.z.shape[-1]), batch, p, gain=False,
+    v = _innovations(model, theta, jnp.eye(batch.z.shape[-1]), batch, p, gain="none",
                      n_local=n_local)[0]
     return noise_covariance(v, jnp.sum(batch.mask), diagonal, jnp.zeros(v.shape[-1]))
 
@@ -242,6 +249,7 @@ def fit_filter_error(
     outer_rtol: float = 1e-4,
     steps_per_pass: int = 4,
     local_per_flight: bool = False,
+    gain: str = "auto",
 ) -> FilterErrorResult:
     """[`fwid.fit`][] with `method="filter-error"` (see the module docstring).
 
@@ -257,6 +265,8 @@ def fit_filter_error(
     - `local_per_flight`: with several experiments, estimate the model's `local` parameters
       (bias terms) per experiment (named `name@i`, as output error's joint fits); by default
       they are shared between the experiments.
+    - `gain`: `"book"` (Eq. 5.48), `"bounded"` (the discrete corrector's) or `"auto"`: the
+      book's, and the bounded one where the book's does not converge (module docstring).
 
     **Returns:** a [`FilterErrorResult`][]; its `names` are the model's free parameters and
     then `F_<state>`.
@@ -284,15 +294,52 @@ def fit_filter_error(
           else _output_error_r(start_model, theta, batch, p, diagonal, n_local))
     if not bool(jnp.all(jnp.isfinite(Rk))):
         Rk = jnp.diag(jnp.var(batch.z.reshape(-1, batch.z.shape[-1]), axis=0))
+    if gain not in ("auto", "book", "bounded"):
+        raise ValueError(f"gain must be 'auto', 'book' or 'bounded', not {gain!r}")
     if progress:
         print(f"fwid: fitting {model.name} by filter error to {', '.join(names)} ...",
               flush=True)
+    run = dict(model=model, start_model=start_model, theta=theta, Rk=Rk, batch=batch, p=p,
+               n_local=n_local, names=names, diagonal=diagonal, max_outer=max_outer,
+               outer_rtol=outer_rtol, steps_per_pass=steps_per_pass, rtol=rtol,
+               cost_rtol=cost_rtol, max_steps=max_steps,
+               start=jnp.concatenate([theta0, jnp.asarray(f0)]))
+    if gain != "auto":
+        res = _relax(gain=gain, **run)
+    else:  # the book's gain; where its relaxation does not settle, the bounded one
+        try:
+            res = _relax(gain="book", **run)
+        except FitDivergedError:
+            res = None
+        if res is None or not bool(res.converged):
+            try:
+                bounded = _relax(gain="bounded", **run)
+            except FitDivergedError:
+                if res is None:
+                    raise
+                bounded = None
+            if bounded is not None and (res is None or bool(bounded.converged)):
+                res = bounded
+    issue(res.warnings, stacklevel=4)
+    if progress:
+        print(f"fwid: filter error {'converged' if bool(res.converged) else 'NOT converged'} "
+              f"in {res.outer} relaxation passes, {int(res.steps)} Gauss-Newton steps"
+              f"{' (the bounded gain)' if res.gain == 'bounded' else ''}, "
+              f"{time.perf_counter() - t0:.1f} s", flush=True)
+    return res
+
+
+def _relax(*, model, start_model, theta, Rk, batch, p, n_local, names, diagonal, max_outer,
+           outer_rtol, steps_per_pass, rtol, cost_rtol, max_steps, start, gain):
+    """The book's relaxation (Sec. 5.6) from `theta` (parameters, then F) and the gain's
+    `Rk`, with the gain `gain`: the [`FilterErrorResult`][] with its warnings."""
     steps, last, change, moved = 0, None, float("nan"), 0
     rise_max = 0.01 * float(jnp.sum(batch.mask)) * batch.z.shape[-1]
     halvings, alt = 0, None  # F-compensation halvings; (theta, Rk) before the compensation
     for outer in range(1, max_outer + 1):
         out = _inner(start_model, theta, batch, Rk, p=p, diagonal=diagonal,
-                     max_steps=steps_per_pass, rtol=rtol, cost_rtol=cost_rtol, n_local=n_local)
+                     max_steps=steps_per_pass, rtol=rtol, cost_rtol=cost_rtol, n_local=n_local,
+                     gain=gain)
         steps += int(out["steps"])
         cost = float(out["cost"])
         if last is None and not np.isfinite(cost):
@@ -348,12 +395,12 @@ def fit_filter_error(
         model=fitted, names=all_names, theta=theta, std=std, std_cr=std, cov=cov,
         corr=correlation(cov), R=out["R"], cost=out["cost"], cost_history=out["hist"],
         passes=out["accepted"], steps=jnp.asarray(steps), converged=jnp.asarray(converged),
-        start=jnp.concatenate([theta0, jnp.asarray(f0)]),
+        start=start,
         noise="diagonal" if diagonal else "full",
         lag1=jnp.max(jax.vmap(lag1_autocorrelation)(v, batch.mask), axis=0),
         residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
         F=jnp.abs(theta[p:]), K=out["K"], P=out["P"], innovations=v,
-        whiteness=whiteness(v, batch.mask, model.outputs), outer=outer)
+        whiteness=whiteness(v, batch.mask, model.outputs), outer=outer, gain=gain)
     found = fit_warnings(res, names, max_steps, information=out["M"], method="filter-error")
     found = [w for w in found if "strongly coloured" not in w]  # the filter handles colour
     if not res.white:
@@ -361,10 +408,5 @@ def fit_filter_error(
         found.append(f"{', '.join(names)}: the {model.name} filter-error innovations are not "
                      f"white ({', '.join(bad)}): a missing effect rather than process noise; "
                      f"next: {advise('model-error', 'filter-error')}")
-    res = dataclasses.replace(res, warnings=tuple(found))
-    issue(res.warnings, stacklevel=4)
-    if progress:
-        print(f"fwid: filter error {'converged' if converged else 'NOT converged'} in "
-              f"{outer} relaxation passes, {steps} Gauss-Newton steps, "
-              f"{time.perf_counter() - t0:.1f} s", flush=True)
-    return res
+    return dataclasses.replace(res, warnings=tuple(found))
+
