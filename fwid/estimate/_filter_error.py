@@ -61,7 +61,7 @@ from ._problem import FitResult, flight_params, free_layout, merge_batch, prepar
 from ._equation_error import equation_error_start, measured_state_index
 from ._riccati import steady_state_gain
 from ._steps import rk4_step
-from ._uncertainty import correlation, covariance, lag1_autocorrelation
+from ._uncertainty import correlation, covariance_held, lag1_autocorrelation
 from ._warnings import fit_warnings, issue
 
 #: Lags of the innovations' autocorrelation that the whiteness measure looks at.
@@ -383,7 +383,11 @@ def _relax(*, model, start_model, theta, Rk, batch, p, n_local, names, diagonal,
     # whose every step failed from the start leaves R as it was: a stall, not convergence)
     converged = (np.isfinite(change) and change <= outer_rtol
                  and (moved > 0 or bool(last["converged"])))
-    cov = covariance(out["M"])
+    # entries the innovations no longer depend on (F grown without bound: the gain is one
+    # and the filter trusts the measurements) are held, the others' uncertainty given them
+    d = np.asarray(jnp.diag(out["M"]))
+    held = ~np.isfinite(d) | (d <= 1e-12 * np.nanmax(np.where(np.isfinite(d), d, 0.0)))
+    cov = covariance_held(out["M"], None, jnp.asarray(held.astype(int)) if held.any() else None)
     std = jnp.sqrt(jnp.abs(jnp.diag(cov)))
     v = out["v"]
     f_names = tuple(f"F_{s}" for s in model.states)
@@ -401,8 +405,17 @@ def _relax(*, model, start_model, theta, Rk, batch, p, n_local, names, diagonal,
         residual_corr=correlation(jnp.einsum("bki,bkj->ij", v, v)),
         F=jnp.abs(theta[p:]), K=out["K"], P=out["P"], innovations=v,
         whiteness=whiteness(v, batch.mask, model.outputs), outer=outer, gain=gain)
-    found = fit_warnings(res, names, max_steps, information=out["M"], method="filter-error")
+    # (the held entries have no std by design: the checks read the others, as at bounds)
+    found = fit_warnings(dataclasses.replace(res, active=jnp.asarray(held.astype(int))), names,
+                         max_steps, information=out["M"], method="filter-error")
     found = [w for w in found if "strongly coloured" not in w]  # the filter handles colour
+    unbounded = [s for s, h in zip(model.states, held[p:]) if h]
+    if unbounded:
+        found.append(f"{', '.join(names)}: the {model.name} filter-error process noise on "
+                     f"{', '.join(unbounded)} grew without bound (the values are in "
+                     "report.json): the filter trusts those measurements fully, so the estimates are those "
+                     "of one-sample-ahead prediction and the measurement noise is below what "
+                     "these flights resolve; their F have no standard deviation")
     if not res.white:
         bad = [k for k, w in res.whiteness.items() if not w["white"]]
         found.append(f"{', '.join(names)}: the {model.name} filter-error innovations are not "
