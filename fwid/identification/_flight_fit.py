@@ -13,6 +13,7 @@ from ..estimate._equation_error import equation_error_locals, loads_at_measured_
 from ..estimate._local import refit_local_affine
 from ..estimate._fit import fit
 from ..estimate._stability import GROWTH_MAX, fastest_growth
+from ..estimate._warnings import quiet_fits
 from ..models._greybox import GreyBoxModel
 from ..simulation._buckets import pad_experiment
 from ..simulation._experiment import Experiment
@@ -134,8 +135,9 @@ def evaluate(
             except FitDivergedError as exc:
                 raise FitDivergedError(f"{name}: {exc} (an unstable model, or a term that "
                                        "grows without bound)") from exc
-            if local is None:
-                r = fit(model.with_free(model.local), exp, names=[name], start="model")
+            if local is None:  # (an internal fit: its warnings are not the model's)
+                with quiet_fits():
+                    r = fit(model.with_free(model.local), exp, names=[name], start="model")
                 local = {k: float(r.model.params[k]) for k in model.local}
         model = model.with_params(local)
     local = {k: float(model.params[k]) for k in model.local}

@@ -24,13 +24,15 @@ def eig_list(eigs) -> list:
 
 def fit_info(fit, outputs) -> dict:
     """The `fit` block of a report: convergence, steps, cost, the noise covariance R (and
-    which: `noise`) and the residual colour at the data's bandwidth (`residual_colour`)."""
+    which: `noise`), the residual colour at the data's bandwidth (`residual_colour`) and, for
+    filter error, the gain used (`gain`)."""
     return {"converged": bool(fit.converged), "passes": int(fit.passes),
             "gauss_newton_steps": int(fit.steps), "cost": float(fit.cost),
             "R": np.asarray(fit.R), "noise": getattr(fit, "noise", "full"),
             "outputs": list(outputs),
             "residual_colour": _colour(fit, outputs),
-            "warnings": list(getattr(fit, "warnings", ()))}
+            "warnings": list(getattr(fit, "warnings", ())),
+            **({"gain": fit.gain} if getattr(fit, "gain", None) else {})}
 
 
 def _colour(fit, outputs) -> dict | None:
