@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import FitDivergedError
-from ..estimate._equation_error import equation_error_locals, loads_at_measured_states
+from ..estimate._equation_error import (equation_error_locals, loads_at_measured_states,
+                                       measured_state_index)
 from ..estimate._local import refit_local_affine
 from ..estimate._fit import fit
 from ..estimate._stability import GROWTH_MAX, fastest_growth
@@ -89,7 +90,7 @@ def _grows(model: GreyBoxModel, exp: Experiment) -> bool:
     """Whether the model's open-loop simulation grows beyond `GROWTH_MAX`-fold over the
     flight (an unstable model: its simulation cannot re-estimate the biases) and its states
     are measured (so that equation error can)."""
-    if not (model.outputs_are_states or model.measured_states is not None):
+    if measured_state_index(model) is None:
         return False  # (equation error needs the states measured)
     T = float(exp.t[-1] - exp.t[0])
     return fastest_growth(model, exp) * T > float(np.log(GROWTH_MAX))
