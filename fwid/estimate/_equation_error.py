@@ -89,6 +89,9 @@ class _Regression:
         each equation (`passes` times); returns `(dtheta, v_i, S_i whitened, weights)`."""
         scale = np.sqrt(np.mean(np.concatenate([r for r, _ in self.blocks]) ** 2, axis=0))
         W = _whitener(np.concatenate([r for r, _ in self.blocks]))
+        if self.p_all == 0:  # nothing to estimate: the residuals are the targets'
+            return (np.zeros(0), [r for r, _ in self.blocks],
+                    [np.zeros((*r.shape, 0)) for r, _ in self.blocks], W)
         for _ in range(passes):
             A = np.concatenate([(self._full(S, c) * W[None, :, None]).reshape(-1, self.p_all)
                                 for (r, S), c in zip(self.blocks, self.cols)])
