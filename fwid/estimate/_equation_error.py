@@ -143,8 +143,9 @@ def _regress(fn, params, layout, exps, targets, extra: int = 0, iters: int = 5):
     one) of each flight, plus `extra` intercepts per equation and flight when `extra`.
     Gauss-Newton from `params` (one step when `fn` is linear in them).
 
-    **Returns:** `(values, (cols, v, Sw, W))`: the estimates by name of the whole vector,
-    and per flight its columns, residuals, whitened regressors and the equation weights."""
+    **Returns:** `(values, (v, Sw, W, names))`: the estimates by name of the whole vector;
+    per flight the residuals and the whitened regressors (the intercepts' columns last), the
+    equation weights, and the names of the regressors' first columns."""
     names = sorted({n for lay in layout for n in lay}, key=[n for lay in layout for n in lay].index)
     col = {n: i for i, n in enumerate(names)}
     values = {n: float(np.asarray(params[n.split("@")[0]])) for n in names}
@@ -169,8 +170,7 @@ def _regress(fn, params, layout, exps, targets, extra: int = 0, iters: int = 5):
             values[n] += float(step[col[n]])
         if np.all(np.abs(step[:p]) <= 1e-12 * (1.0 + np.abs([values[n] for n in names]))):
             break
-    return values, ([c[:len(lay)] for c, lay in zip(cols, layout)], vs,
-                    [S[:, :, :p] for S in Sw], W, names)
+    return values, (vs, Sw, W, names)
 
 
 def _residual_statistics(vs, xs) -> dict:
@@ -261,23 +261,28 @@ def fit_equation_error(
     p = len(all_names)
     cov, cov_cr, M_all = np.zeros((p, p)), np.zeros((p, p)), np.zeros((p, p))
     cost = 0.0
-    for _, vs, Sw, W, regressors in regressions:
+    full_rank = True
+    for vs, Sw, W, regressors in regressions:
+        vws = [v * W for v in vs]
+        cost += 0.5 * sum(float(np.sum(v**2)) for v in vws)
         if not regressors:
             continue
+        M, mid = _uncertainty(Sw, vws)  # the intercepts' columns included ...
+        d = np.sqrt(np.clip(np.diag(M), 0, None))
+        with np.errstate(all="ignore"):  # rank of the information scaled to a unit diagonal
+            full_rank &= bool(np.all(d > 0)
+                              and np.linalg.matrix_rank(M / np.outer(d, d)) == len(M))
+            C = np.asarray(covariance(jnp.asarray(M), jnp.asarray(mid)))
+            C_cr = np.asarray(covariance(jnp.asarray(M)))
+        k = len(regressors)  # ... and the parameters' block kept: intercepts marginalised
         where = [all_names.index(n) for n in regressors]
-        vws = [v * W for v in vs]
-        M, mid = _uncertainty(Sw, vws)
         sub = np.ix_(where, where)
-        M_all[sub] = M
-        with np.errstate(all="ignore"):
-            cov[sub] = np.asarray(covariance(jnp.asarray(M), jnp.asarray(mid)))
-            cov_cr[sub] = np.asarray(covariance(jnp.asarray(M)))
-        cost += 0.5 * sum(float(np.sum(v**2)) for v in vws)
-    d = np.sqrt(np.clip(np.diag(M_all), 0, None))
-    with np.errstate(all="ignore"):  # rank of the information scaled to a unit diagonal
-        full_rank = bool(np.all(d > 0) and np.linalg.matrix_rank(M_all / np.outer(d, d)) == p)
+        cov[sub], cov_cr[sub] = C[:k, :k], C_cr[:k, :k]
+        with np.errstate(all="ignore"):  # their information, the intercepts marginalised
+            M_all[sub] = np.linalg.pinv(C_cr[:k, :k]) if np.all(np.isfinite(C_cr)) \
+                else M[:k, :k]
     finite = bool(np.all(np.isfinite(theta)) and np.all(np.isfinite(cov)))
-    vs2 = regressions[-1][1]
+    vs2 = regressions[-1][0]
     v2 = np.concatenate(vs2)
     first = {n.split("@")[0]: theta[i] for i, n in enumerate(all_names)
              if "@" not in n or n.endswith("@0")}
