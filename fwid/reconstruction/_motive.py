@@ -18,24 +18,16 @@ header names: order `XYZ` is `Rx(X) Ry(Y) Rz(Z)`.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .._errors import FlightDataError
 from ._frames import frame_times
-from ._glitches import drop_glitches
-from ._raw import (
-    MAX_DROPOUT, OnboardLog, RawTake, check_quaternions, check_time, dropouts, parse_rows,
-    read_lines, take_name, trim_untracked,
-)
-from ._rotations import (
-    continuous_sign, euler_to_matrix_ordered, matrix_to_quat, to_ned, tracked_matrices,
-)
+from ._raw import MAX_DROPOUT, RawTake, check_quaternions, check_time, parse_rows
+from ._rotations import euler_to_matrix_ordered, to_ned, tracked_matrices
+from ._tracked import pose_take
 from ._units import length_unit
 from ._wings import wing_frequency
 
-LOG_COLUMNS = ("t", "de", "dr", "f", "p", "q", "r")
 #: The rotation orders of Motive's Euler exports.
 EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 #: The oldest `Format Version` of the layout read here (Motive 1.7 on: 1.2, 1.21, 1.22, 1.23).
@@ -161,27 +153,10 @@ def read_motive(path: str, lines: list[str], body: str | None = None, frame: str
     flap = _wings(data, t, kind, names, group, comp, body, euler, frame, R, tracked, path)
     if flap is not None:
         warnings.append(flap[1])
-    q = continuous_sign(np.where(tracked[:, None], matrix_to_quat(R), np.nan), tracked)
-    kept, said = drop_glitches(t, q, tracked, pos, path)
-    warnings += said
-    cut = trim_untracked(t, pos, q, kept, {"dropped": tracked & ~kept},
-                         None if flap is None else {"f": flap[0]})
-    if cut is None:
-        raise FlightDataError(f"{path}: rigid body {body!r} is tracked on fewer than 3 rows")
-    t, pos, q, tracked, extra, controls = cut
-    gaps = dropouts(t, tracked, path, max_dropout, extra["dropped"])
-    name = take_name(path)
-    if onboard is False:
-        log = None
-    else:
-        log = read_onboard(onboard or Path(path).with_name(f"{name}.onboard.csv"), path,
-                           given=onboard is not None)
-        if log is None:
-            warnings.append(f"no autopilot log ({name}.onboard.csv) beside the take: the pose "
-                            "alone, no controls")
     rotation = f"{euler} Euler" if euler else "quaternion"
-    return RawTake(name, path, f"Motive CSV export (body {body}, {frame}, {units}, {rotation})",
-                   frame, t, pos, q, tracked, controls, log, gaps, warnings)
+    return pose_take(path, t, pos, R, tracked, frame, warnings, onboard, max_dropout,
+                     f"Motive CSV export (body {body}, {frame}, {units}, {rotation})",
+                     f"rigid body {body!r}", None if flap is None else {"f": flap[0]})
 
 
 def _matrices(rot, tracked, euler, t, path):
@@ -215,37 +190,6 @@ def _wings(data, t, kind, names, group, comp, body, euler, frame, R, tracked, pa
         return None
     f, note = wing_frequency(t, R, tracked, wings)
     return None if f is None else (f, note)
-
-
-def read_onboard(path, take: str, given: bool = False) -> OnboardLog | None:
-    """The autopilot's log `t,de,dr,f,p,q,r` (+ extras) of a take, or None when there is
-    none beside the take (a tracking-only take); a log named with `given` that is not
-    there, a missing column or a non-uniform clock is a `FlightDataError` naming the
-    file."""
-    path = Path(path)
-    if not path.is_file():
-        if given:
-            raise FlightDataError(f"{take}: no such autopilot log {path} (--onboard); give the "
-                                  "path of the take's log, or leave --onboard out for the pose "
-                                  "alone")
-        return None
-    lines = read_lines(path)
-    if not lines:
-        raise FlightDataError(f"{path}: empty autopilot log")
-    header = [h.strip() for h in lines[0].split(",")]
-    missing = [c for c in LOG_COLUMNS if c not in header]
-    if missing:
-        raise FlightDataError(f"{path}: the autopilot log lacks column(s) {', '.join(missing)}; "
-                              f"it needs {','.join(LOG_COLUMNS)}")
-    data = parse_rows(lines[1:], str(path), 2, width=len(header))
-    cols = {h: data[:, i] for i, h in enumerate(header) if h}
-    check_time(cols["t"], str(path), 2)
-    for c in LOG_COLUMNS[1:]:
-        bad = np.flatnonzero(~np.isfinite(cols[c]))
-        if bad.size:
-            raise FlightDataError(f"{path}, line {bad[0] + 2}: column {c} is empty; the log "
-                                  "needs every cell")
-    return OnboardLog(str(path), cols.pop("t"), cols)
 
 
 def _number(text) -> float | None:

@@ -60,9 +60,9 @@ class RawTake(NamedTuple):
 
 
 def take_name(path) -> str:
-    """A take's name: its file name without `.csv` or `.csv.gz`."""
-    name = Path(path).name
-    for suffix in (".gz", ".csv"):
+    """A take's name: its file name without `.csv`, `.tsv`, `.mat` (and `.gz`)."""
+    name = Path(path).name.removesuffix(".gz")
+    for suffix in (".csv", ".tsv", ".mat"):
         name = name.removesuffix(suffix)
     return name
 

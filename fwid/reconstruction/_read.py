@@ -1,4 +1,5 @@
-"""Which raw form a file is (told by its first line), and the raw files of a folder."""
+"""Which raw form a file is (told by its first lines, or a MATLAB file's own header), and the
+raw files of a folder."""
 
 from __future__ import annotations
 
@@ -10,18 +11,25 @@ from ._fwid_raw import read_fwid_raw
 from ._map import RecordingMap, read_map
 from ._mapped import read_mapped, read_mapped_log
 from ._motive import is_old_export, old_export_error, read_motive
+from ._qtm import is_qtm_mat, is_qtm_tsv, read_qtm_mat, read_qtm_tsv
 from ._raw import MAX_DROPOUT, RawTake, read_lines
 from ._rotations import FRAMES
+from ._vicon import is_nexus, read_nexus
+
+
+#: The files of a folder read as raw takes: CSV (fwid raw, Motive, Vicon Nexus), QTM's TSV
+#: and MATLAB exports, gzip-compressed or not.
+RAW_PATTERNS = ("*.csv", "*.csv.gz", "*.tsv", "*.tsv.gz", "*.mat")
 
 
 def raw_files(paths) -> list[Path]:
-    """The raw takes named by `paths` (files, or folders: their top-level `*.csv` that do not
-    end in `.onboard.csv`; subfolders are ignored), in order."""
+    """The raw takes named by `paths` (files, or folders: their top-level `RAW_PATTERNS` files
+    that do not end in `.onboard.csv`; subfolders are ignored), in order."""
     out = []
     for p in [paths] if isinstance(paths, (str, os.PathLike)) else paths:
         p = Path(p)
         if p.is_dir():
-            found = sorted(f for f in [*p.glob("*.csv"), *p.glob("*.csv.gz")]
+            found = sorted(f for pat in RAW_PATTERNS for f in p.glob(pat)
                            if not f.name.endswith((".onboard.csv", ".onboard.csv.gz")))
             if not found:
                 raise FlightDataError(f"{p}: no raw take (*.csv) in the folder")
@@ -36,17 +44,21 @@ def raw_files(paths) -> list[Path]:
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
              onboard=None, max_dropout: float = MAX_DROPOUT, recording_map=None,
              strict_frame: bool = False) -> RawTake:
-    """Read one raw take (a fwid raw CSV, a Motive export, or a lab's file through a map).
+    """Read one raw take (a fwid raw CSV, a Motive, Vicon Nexus or Qualisys QTM export, or a
+    lab's file through a map).
 
     The take comes back in north-east-down, body axes forward-right-down (the guide's pages
     on raw recordings and on your lab's recordings).
 
     **Arguments:**
-    - `path`: a fwid raw CSV or a Motive CSV export (its first line starts `Format Version`);
-    - `body`: the Motive rigid body's name (needed when the take holds several);
+    - `path`: a fwid raw CSV, a Motive CSV export (its first line starts `Format Version`),
+      a Vicon Nexus CSV export (a `Segments` or `Objects` block), a Qualisys QTM 6DOF TSV
+      (first line `NO_OF_FRAMES`) or MATLAB (`.mat`) export;
+    - `body`: the rigid body's (segment's) name (needed when the take holds several);
     - `frame`: `ned`, `y-up` or `z-up`: the recording's world frame, body axes alike
-      (default: `ned` for the fwid raw CSV, `y-up` for Motive);
-    - `onboard`: the autopilot's log of a Motive take (default `NAME.onboard.csv` beside it);
+      (default: `ned` for the fwid raw CSV, `y-up` for Motive, `z-up` for Vicon and QTM);
+    - `onboard`: the autopilot's log of a tracking system's take (default
+      `NAME.onboard.csv` beside it);
     - `max_dropout`: the longest gap in the tracking (s) that is bridged;
     - `recording_map`: a recording map (its path, or [`fwid.reconstruction.read_map`][]'s
       result) for a lab's own columns: the take's pose (or, without `[tracking]`, a Motive
@@ -64,6 +76,9 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     path = Path(path)
     if not path.is_file():
         raise FlightDataError(f"{path}: no such file")
+    if is_qtm_mat(path):
+        return read_qtm_mat(str(path), body=body, frame=frame or "z-up", onboard=onboard,
+                            max_dropout=max_dropout)
     lines = read_lines(path)
     if not lines:
         raise FlightDataError(f"{path}: empty file")
@@ -82,6 +97,14 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
             notes.append(f"the map's [tracking] is not used: a Motive export holds its own "
                          f"pose (the rigid body's columns)")
         return take._replace(onboard=log, warnings=take.warnings + notes)
+    vendor = (read_nexus if is_nexus(lines) else read_qtm_tsv if is_qtm_tsv(lines) else None)
+    if vendor is not None:
+        if m is not None:
+            raise InputError(f"{path}: --map is for a lab's own columns; a "
+                             f"{'Vicon Nexus' if vendor is read_nexus else 'Qualisys QTM'} "
+                             "export is read as it is (leave --map out)")
+        return vendor(str(path), lines, body=body, frame=frame or "z-up", onboard=onboard,
+                      max_dropout=max_dropout)
     if m is not None and m.position is not None:
         return read_mapped(str(path), m, frame=frame, strict_frame=strict_frame,
                            max_dropout=max_dropout, lines=lines)

@@ -1,0 +1,193 @@
+"""Vicon Nexus and Qualisys QTM exports, written here to each vendor's documented layout from
+a known pose, read like the fwid raw CSV of the same pose; the real Nexus export in
+`../shared/realdata/`; each refusal one line."""
+
+import numpy as np
+import pytest
+from scipy.io import savemat
+from scipy.spatial.transform import Rotation
+
+from fwid import FlightDataError
+from fwid.cli import main
+from fwid.reconstruction import read_raw
+
+from .helpers import REAL, Motion, noisy, write_fwid_raw
+
+RATE = 200.0
+T = np.arange(0, 2, 1 / RATE)
+C_ZUP = np.diag([1.0, -1.0, -1.0])  # z-up <-> NED
+LOST = (40, 45)
+
+
+@pytest.fixture(scope="module")
+def pose():
+    return noisy(Motion(seed=3), T, np.random.default_rng(1))
+
+
+@pytest.fixture(scope="module")
+def ref(pose, tmp_path_factory):
+    d = tmp_path_factory.mktemp("ref")
+    return read_raw(write_fwid_raw(d / "ref.csv", Motion(seed=3), T, pos=pose[0], R=pose[1],
+                                   lost=[LOST]))
+
+
+def _zup(pose):
+    pos, R = pose
+    return 1e3 * pos @ C_ZUP, C_ZUP @ R @ C_ZUP
+
+
+def _same(a, b, rows=slice(None)):
+    assert np.array_equal(a.tracked, b.tracked[rows])
+    ok = a.tracked
+    assert np.allclose(a.t, b.t[rows], atol=1e-9)
+    assert np.max(np.abs(a.pos[ok] - b.pos[rows][ok])) < 2e-6  # written to 1e-3 mm
+    assert np.max(1 - np.abs(np.sum(a.quat[ok] * b.quat[rows][ok], 1))) < 1e-8  # 9 decimals
+    assert a.dropouts == b.dropouts or rows != slice(None)
+
+
+def write_nexus(path, pose, euler=None, bodies=("fly:body", "wand:tip")):
+    pos, R = _zup(pose)
+    if euler:  # the angles about X, Y, Z, in the columns RX, RY, RZ
+        ang = Rotation.from_matrix(R).as_euler(euler, degrees=True)
+        rot = ang[:, [euler.index(c) for c in "XYZ"]]
+    else:
+        rot = np.rad2deg(Rotation.from_matrix(R).as_rotvec())
+    name = f"Segments (Euler {euler})" if euler else "Segments"
+    lines = [name, f"{RATE:g}", ",," + ",,,,,,".join(bodies) + ",,,,,",
+             "Frame,Sub Frame" + ",RX,RY,RZ,TX,TY,TZ" * len(bodies),
+             ",," + ",".join(["deg,deg,deg,mm,mm,mm"] * len(bodies))]
+    for i in range(len(T)):
+        cells = [f"{v:.9f}" for v in (*rot[i], *pos[i])]
+        if LOST[0] <= i < LOST[1]:
+            cells = [""] * 6
+        lines.append(",".join([str(i + 1), "0", *cells, *["0"] * 6 * (len(bodies) - 1)]))
+    path.write_bytes(("\ufeff" + "\r\n".join(lines) + "\r\n\r\nTrajectories\r\n").encode())
+    return path
+
+
+@pytest.mark.parametrize("euler", [None, "XYZ", "ZYX"])
+def test_nexus_reads_like_the_fwid_raw_twin(tmp_path, pose, ref, euler):
+    take = read_raw(write_nexus(tmp_path / "take.csv", pose, euler), body="body")
+    _same(take, ref)
+    assert take.source.startswith("Vicon Nexus CSV export (Segments fly:body, z-up, mm")
+
+
+def test_nexus_bodies_are_named(tmp_path, pose):
+    path = write_nexus(tmp_path / "take.csv", pose)
+    for body, words in ((None, "holds fly:body, wand:tip; choose one with --body"),
+                        ("arm", "no segment named 'arm' in the Segments block; it holds "
+                                "fly:body, wand:tip")):
+        with pytest.raises(FlightDataError) as e:
+            read_raw(path, body=body)
+        assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_body_never_tracked_is_named(tmp_path, pose):
+    path = write_nexus(tmp_path / "take.csv", pose)
+    path.write_text(path.read_text(encoding="utf-8-sig").replace("0,0,0,0,0,0", ",,,,,"))
+    rc = main(["reconstruct", str(path), "--out", str(tmp_path / "o"), "--body", "wand:tip",
+               "--quiet"])
+    assert rc == 2
+    with pytest.raises(FlightDataError, match="segment 'wand:tip' is never tracked"):
+        read_raw(path, body="tip")
+
+
+def test_real_nexus_export_reads():
+    """The unedited Nexus export of a pendulum rig: 200 Hz, 39315 frames, a pose that stays
+    in the room and swings."""
+    path = REAL / "vicon_nexus_test_rig.csv.gz"
+    if not path.is_file():
+        pytest.skip(f"the real recordings are not here ({REAL}): see the project's shared data")
+    take = read_raw(path)
+    assert take.source.startswith("Vicon Nexus CSV export (Segments test rig:arm, z-up, mm, "
+                                  "helical")
+    assert abs(1 / take.dt - 200) < 1e-9 and len(take.t) == 39315
+    assert take.t[-1] == pytest.approx(196.57)
+    ok = take.tracked
+    assert ok.sum() > 0.99 * len(ok) and np.all(np.isfinite(take.pos[ok]))
+    assert np.all(np.abs(take.pos[ok]) < 1.0)  # metres: within a metre of the lab origin
+    angle = 2 * np.degrees(np.arccos(np.clip(np.abs(take.quat[ok, 0]), 0, 1)))
+    assert 5 < np.ptp(angle) < 120  # it swings, as a pendulum does
+    # the pendulum's arm turns about one lab axis: its rotation vectors keep one direction
+    rv = Rotation.from_quat(take.quat[ok][:, [1, 2, 3, 0]]).as_rotvec()
+    big = rv[np.linalg.norm(rv, axis=1) > np.radians(8)]
+    axis = np.linalg.svd(big, full_matrices=False)[2][0]
+    assert np.median(np.abs(big @ axis) / np.linalg.norm(big, axis=1)) > 0.9
+
+
+def write_qtm_tsv(path, pose, start=1, bodies=("Wand", "DelFly")):
+    pos, R = _zup(pose)
+    rpy = Rotation.from_matrix(R).as_euler("XYZ", degrees=True)
+    rot = R.transpose(0, 2, 1).reshape(-1, 9)  # column by column
+    n = len(T) - (start - 1)
+    head = [f"NO_OF_FRAMES\t{n}", "NO_OF_CAMERAS\t8", f"NO_OF_BODIES\t{len(bodies)}",
+            f"FREQUENCY\t{RATE:g}", "NO_OF_ANALOG\t0", "ANALOG_FREQUENCY\t0",
+            "DESCRIPTION\t--", "TIME_STAMP\t2026-11-28, 10:00:00.000\t1234.5",
+            "DATA_INCLUDED\t6D", "BODY_NAMES\t" + "\t".join(bodies),
+            "BODY_FILTERS\t" + "\t".join(["Default"] * len(bodies)),
+            "TRANSLATION_ORIGIN\t" + "\t".join(["Global"] * len(bodies)),
+            "ROTATION_ORIGIN\t" + "\t".join(["Global"] * len(bodies))]
+    comps = "X\tY\tZ\tRoll\tPitch\tYaw\tResidual\t" + "\t".join(f"Rot[{k}]" for k in range(9))
+    head.append("Frame\tTime\t" + "\t\t".join(f"{b} {comps}" for b in bodies))
+    for i in range(start - 1, len(T)):
+        mine = [f"{v:.9f}" for v in (*pos[i], *rpy[i], 0.8, *rot[i])]
+        if LOST[0] <= i < LOST[1]:
+            mine = [""] * 16
+        other = ["0"] * 6 + ["1.0"] + [str(v) for v in np.eye(3).ravel()]
+        cells = ["\t".join(mine if b == "DelFly" else other) for b in bodies]
+        head.append(f"{i + 1}\t{i / RATE:.5f}\t" + "\t\t".join(cells))
+    path.write_text("\n".join(head) + "\n")
+    return path
+
+
+def test_qtm_tsv_reads_like_the_fwid_raw_twin(tmp_path, pose, ref):
+    _same(read_raw(write_qtm_tsv(tmp_path / "take.tsv", pose), body="DelFly"), ref)
+
+
+def test_qtm_trimmed_tsv_starts_at_its_first_frame(tmp_path, pose, ref):
+    take = read_raw(write_qtm_tsv(tmp_path / "take.tsv", pose, start=21), body="DelFly")
+    assert take.t[0] == pytest.approx(20 / RATE)
+    _same(take, ref, slice(20, None))
+
+
+def test_qtm_rotation_order_matters(tmp_path, pose, ref):
+    """The matrix written row by row instead reads as another attitude."""
+    path = write_qtm_tsv(tmp_path / "take.tsv", pose)
+    take = read_raw(path, body="DelFly")
+    lines = path.read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("Frame\t"))
+    out = lines[:k + 1]
+    j = lines[k].split("\t").index("DelFly X") + 7
+    for ln in lines[k + 1:]:
+        c = ln.split("\t")
+        if c[j]:
+            m = np.array(c[j:j + 9], float).reshape(3, 3).T.ravel()
+            c[j:j + 9] = [repr(float(v)) for v in m]
+        out.append("\t".join(c))
+    path.write_text("\n".join(out) + "\n")
+    swapped = read_raw(path, body="DelFly")
+    ok = take.tracked
+    assert np.max(1 - np.abs(np.sum(swapped.quat[ok] * ref.quat[ok], 1))) > 0.1
+
+
+def write_qtm_mat(path, pose):
+    pos, R = _zup(pose)
+    n = len(T)
+    pos3 = np.stack([np.zeros((3, n)), pos.T])
+    rot = R.transpose(0, 2, 1).reshape(-1, 9).T
+    rot9 = np.stack([np.tile(np.eye(3).reshape(9, 1), n), rot])
+    pos3[1][:, LOST[0]:LOST[1]] = np.nan
+    rot9[1][:, LOST[0]:LOST[1]] = np.nan
+    rpy = np.stack([np.zeros((3, n)), Rotation.from_matrix(R).as_euler("XYZ", True).T])
+    meas = {"File": "take.qtm", "FrameRate": RATE, "Frames": n, "StartFrame": 1,
+            "RigidBodies": {"Bodies": 2, "Name": np.array(["Wand", "DelFly"], dtype=object),
+                            "Positions": pos3, "Rotations": rot9, "RPYs": rpy,
+                            "Residual": np.ones((2, 1, n))}}
+    savemat(path, {"take": meas})
+    return path
+
+
+def test_qtm_mat_reads_like_the_fwid_raw_twin(tmp_path, pose, ref):
+    take = read_raw(write_qtm_mat(tmp_path / "take.mat", pose), body="DelFly")
+    assert take.name == "take" and take.source.startswith("QTM MATLAB export (body DelFly")
+    _same(take, ref)
