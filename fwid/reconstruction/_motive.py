@@ -47,7 +47,8 @@ def is_old_export(lines: list[str]) -> bool:
     """Whether `lines` are an OptiTrack export in the old 1.1-era layout (Arena, Tracking
     Tools, Motive up to 1.5): `comment,...`, `info,version,...` and `frame,...` lines."""
     head = [ln.split(",", 1)[0].strip().lower() for ln in lines[:12]]
-    return head[:1] in (["comment"], ["info"]) and "info" in head
+    branded = head[:1] == ["comment"] and "optitrack" in lines[0].lower()
+    return branded or (head[:1] in (["comment"], ["info"]) and "info" in head)
 
 
 def old_export_error(path: str, lines: list[str]) -> FlightDataError:
@@ -70,7 +71,11 @@ def _check_layout(path: str, lines: list[str], head: dict[str, str]) -> None:
         raise FlightDataError(f"{path}: the Motive header is cut short (7 header lines expected)")
     second = [(lines[i].split(",") + ["", ""])[1].strip() for i in (2, 3)]
     first = lines[6].split(",", 1)[0].strip()
-    if second != ["Type", "Name"] or first != "Frame":
+    # Some exports (format 1.22 with Euler angles among them) leave the first two cells of
+    # the descriptor rows blank: the rows are read by their place, lines 3-7, all the same.
+    if second == ["", ""] and "Rigid Body" not in [c.strip() for c in lines[2].split(",")]:
+        second = ["no column types"]
+    if second not in (["Type", "Name"], ["", ""]) or first != "Frame":
         raise FlightDataError(
             f"{path}: lines 3-7 of the Motive export do not name the columns (Type, Name, ID, "
             f"Rotation/Position, then Frame, Time (Seconds), X, Y, ...); {_REEXPORT}")

@@ -171,3 +171,43 @@ def test_real_export_bodies_are_refused_naming_their_glitches(body):
     assert "\n" not in msg and "tracked frames are glitches" in msg, msg
     flips = int(msg.split(" orientation flips")[0].rsplit("(", 1)[1])
     assert flips >= 30 and "more frames only repeat the previous pose" in msg
+
+
+def _blank_header(labels: bool) -> str:
+    """A format 1.22 Euler export, its descriptor rows with (`labels`) or without `Type`,
+    `Name` ... in their first two cells."""
+    head = ("Format Version,1.22,Take Name,x,Capture Frame Rate,120.000000,Export Frame "
+            "Rate,120.000000,Rotation Type,XYZ,Length Units,Meters,Coordinate Space,Global")
+    first = [("Type", "Name", "ID", "") if labels else ("", "", "", "")][0]
+    rows = ["", f",{first[0]}" + ",Rigid Body" * 6, f",{first[1]}" + ",A" * 6,
+            f",{first[2]}" + ",1" * 6, ",,Rotation,Rotation,Rotation,Position,Position,Position",
+            "Frame,Time (Seconds),X,Y,Z,X,Y,Z"]
+    data = [f"{i},{i / 120:.6f},{10 + i * 0.5},{-5 + 0.2 * i},{30 - i},0.1,{1 + 1e-3 * i},0.2"
+            for i in range(30)]
+    return "\n".join([head, *rows, *data]) + "\n"
+
+
+def test_blank_descriptor_cells_read_as_the_labelled_rows(tmp_path):
+    """Motive 1.22's Euler export leaves the first two cells of its Type and Name rows blank:
+    read by the rows' places, the same pose as the labelled header's."""
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    (tmp_path / "a" / "take.csv").write_text(_blank_header(labels=True))
+    (tmp_path / "b" / "take.csv").write_text(_blank_header(labels=False))
+    a, b = read_raw(tmp_path / "a" / "take.csv"), read_raw(tmp_path / "b" / "take.csv")
+    assert b.source == a.source == "Motive CSV export (body A, y-up, Meters, XYZ Euler)"
+    np.testing.assert_array_equal(a.pos, b.pos)
+    np.testing.assert_array_equal(a.quat, b.quat)
+    assert np.allclose(b.pos[5], [0.1, 0.2, -1.005])  # y-up metres to NED
+
+
+def test_old_optitrack_export_with_comments_is_named(tmp_path, capsys):
+    """The old OptiTrack export opens with `comment,"OptiTrack Export Data"` lines (as many
+    as the exporter wrote): one line that names it and says how to export a readable take."""
+    path = tmp_path / "take.csv"
+    path.write_text('comment,"OptiTrack Export Data"\n' + "comment,notes\n" * 14
+                    + OLD_EXPORT.split("\n", 1)[1])
+    rc = main(["reconstruct", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "old layout (format version 1.1" in err[0] and "re-export the take from Motive" in err[0]
