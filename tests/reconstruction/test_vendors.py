@@ -191,3 +191,28 @@ def test_qtm_mat_reads_like_the_fwid_raw_twin(tmp_path, pose, ref):
     take = read_raw(write_qtm_mat(tmp_path / "take.mat", pose), body="DelFly")
     assert take.name == "take" and take.source.startswith("QTM MATLAB export (body DelFly")
     _same(take, ref)
+
+
+def test_qtm_reconstruction_equals_the_motive_twins(tmp_path, pose):
+    """The same pose as a QTM TSV and as a Motive export, neither with an autopilot log:
+    `fwid reconstruct` gives the same states."""
+    from .helpers import write_motive, write_vehicle
+
+    states = {}
+    for form in ("qtm", "motive"):
+        d = tmp_path / form
+        d.mkdir()
+        write_vehicle(d)
+        if form == "qtm":
+            write_qtm_tsv(d / "take.tsv", pose)
+        else:
+            write_motive(d / "take.csv", Motion(seed=3), T, pos=pose[0], R=pose[1], log=False,
+                         lost=[LOST])
+        out = tmp_path / f"{form}-out"
+        assert main(["reconstruct", str(d), "--out", str(out), "--body", "DelFly",
+                     "--keep-ground", "--quiet"]) == 0
+        states[form] = np.genfromtxt(out / "take.csv", delimiter=",", names=True)
+    a, b = states["qtm"], states["motive"]
+    assert len(a) == len(b) > 300
+    for c in ("u", "v", "w", "p", "q", "r", "phi", "theta", "psi"):
+        assert np.max(np.abs(a[c] - b[c])) < 1e-4 * (1 + np.max(np.abs(b[c])))  # 0.01 %: rounding, c
