@@ -153,18 +153,19 @@ def parser() -> argparse.ArgumentParser:
                         "smoothed states and loads (the guide's 'Formats and interfaces' page, "
                         "docs/reference/formats.md)", formatter_class=fmt)
     rc.add_argument("raw", nargs="+", metavar="RAW",
-                    help="raw takes: fwid raw CSVs, Motive CSV exports, or a lab's own logs "
-                    "read through --map; or folders of them (their top-level *.csv and "
-                    "*.csv.gz, not *.onboard.csv)")
+                    help="raw takes: fwid raw CSVs, Motive or Vicon Nexus CSV exports, QTM "
+                    "6DOF TSV or MATLAB exports, or a lab's own logs read through --map; or "
+                    "folders of them (their top-level *.csv, *.tsv, *.mat, gzipped or not, not "
+                    "*.onboard.csv)")
     rc.add_argument("--out", required=True, help="folder for the flights, vehicle.json, "
                     "reconstruction.json and one figure per take")
-    rc.add_argument("--body", default=None, help="the Motive rigid body's name (needed when the "
-                    "take holds several)")
+    rc.add_argument("--body", default=None, help="the rigid body's (Vicon segment's) name "
+                    "(needed when the take holds several)")
     rc.add_argument("--frame", choices=("ned", "y-up", "z-up"), default=None,
                     help="the recording's world frame, body axes alike (default: ned for the "
-                    "fwid raw CSV, y-up for Motive)")
+                    "fwid raw CSV, y-up for Motive, z-up for Vicon and QTM)")
     rc.add_argument("--onboard", default=None, metavar="LOG.csv",
-                    help="the autopilot log of a single Motive take (default: NAME.onboard.csv "
+                    help="the autopilot log of a single tracking take (default: NAME.onboard.csv "
                     "beside it)")
     rc.add_argument("--clock-offset", type=float, default=None, metavar="S",
                     help="t_tracking = t_onboard + S, instead of finding it from the gyro")
