@@ -97,18 +97,23 @@ def _slow_tracking(t, quat, pos, seen, path, rate_log):
     return held, rate, [note]
 
 
-def _fill_held(t, pos, q, tracked, held):
-    """Positions and (sign-continuous) quaternions on the held rows between tracked ones,
-    interpolated in time from the tracked rows; and `tracked` with those rows added."""
+def _fill_held(t, pos, att, tracked, held, m: RecordingMap):
+    """The recorded positions and attitude columns on the held rows between tracked ones,
+    interpolated in time from the tracked rows (Euler angles unwrapped, quaternions' signs
+    made continuous first); and `tracked` with those rows added."""
     idx = np.flatnonzero(tracked)
     rows = np.arange(len(t))
     inside = held & ~tracked & (rows > idx[0]) & (rows < idx[-1])
-    pos, q = pos.copy(), q.copy()
-    for a in (pos, q):
+    src = att[idx].astype(float)
+    if m.euler is not None:
+        src = np.unwrap(src * m.angle_scale, axis=0) / m.angle_scale
+    elif m.quaternion is not None:
+        src = continuous_sign(src)
+    pos, att = pos.astype(float), att.astype(float)
+    for a, known in ((pos, pos[idx]), (att, src)):
         for i in range(a.shape[1]):
-            a[inside, i] = np.interp(t[inside], t[idx], a[idx, i])
-    q[inside] /= np.linalg.norm(q[inside], axis=1, keepdims=True)
-    return pos, q, tracked | inside
+            a[inside, i] = np.interp(t[inside], t[idx], known[:, i])
+    return pos, att, tracked | inside
 
 
 def _pick(cols: dict, names, path, m: RecordingMap) -> np.ndarray:
@@ -250,6 +255,8 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
         tracked = np.zeros(len(t), bool)
         tracked[fresh], said = drop_glitches(t[fresh], quat[fresh], np.ones(len(fresh), bool),
                                              at[fresh], path, held=False)
+        pos, att, tracked = _fill_held(t, pos, att, tracked, held, m)
+        R, _ = _attitude_matrices(att, m, path)
     notes += said
     sensors = mapped_controls(cols, path, m) if m.log_is_take else {}
     convention = Convention(frame or m.frame, (1.0, 1.0, 1.0), m.axes)
@@ -273,8 +280,6 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     q = np.where(tracked[:, None], matrix_to_quat(R), np.nan)
     # onto the uniform grid: positions and sign-continuous quaternions, linear (renormalised)
     q = continuous_sign(q, tracked)
-    if held is not None:
-        pos, q, tracked = _fill_held(t, pos, q, tracked, held)
     seen = np.all(np.isfinite(onto_grid(np.where(seen[:, None], pos, np.nan), how)), 1)
     pos, q = onto_grid(np.where(tracked[:, None], pos, np.nan), how), onto_grid(q, how)
     sensors = {k: onto_grid(v, how) for k, v in sensors.items()}

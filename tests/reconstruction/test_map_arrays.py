@@ -212,6 +212,7 @@ def test_tracking_slower_than_its_log(tmp_path, motion):
     warn = " | ".join(entry["warnings"])
     assert "slower than the log's 100 Hz" in warn and "merged" in warn, warn
     assert "dropped as dropouts" not in warn and entry["dropouts"] == [], warn
+    assert "no convention" not in warn and entry["imu"]["acc"]["z"]["corr"] > 0.95, entry["imu"]
     header = (tmp_path / "out" / "a.csv").read_text().splitlines()[0].split(",")
     out = np.loadtxt(tmp_path / "out" / "a.csv", delimiter=",", skiprows=1)
     col = {h: out[:, i] for i, h in enumerate(header)}
