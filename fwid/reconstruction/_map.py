@@ -1,5 +1,6 @@
-"""The recording map: a TOML file that says where a lab's own CSV files keep the time, the
-pose, the onboard sensors and the controls, in which units and axes.
+"""The recording map: a TOML file that says where a lab's own files (CSV, TSV, or MATLAB,
+NumPy and HDF5 arrays: `_arrays.py`) keep the time, the pose, the onboard sensors and the
+controls, in which units and axes.
 
 ```toml
 [time]                      # the time base of the file that holds the pose
@@ -10,9 +11,10 @@ unit = "ms"                 # (or frame_column = "Frame" and rate = 120.0, Hz)
 position = ["otX0", "otY0", "otZ0"]
 position_unit = "m"         # m | mm
 frame = "z-up"              # ned | y-up | z-up, world and body axes alike
-attitude = ["otRoll0", "otPitch0", "otYaw0"]   # roll, pitch, yaw; or four quaternion columns
+attitude = ["otRoll0", "otPitch0", "otYaw0"]   # roll, pitch, yaw; or 4 quaternion, 9 matrix columns
 attitude_unit = "deg"       # deg | rad
-euler = "ZYX"               # rotation order; or quaternion = "wxyz" | "xyzw"
+euler = "ZYX"               # intrinsic order (six); or quaternion = "wxyz" | "xyzw"
+# attitude_form = "matrix"  # euler | quaternion | matrix (row-major, body to lab)
 
 [onboard]                   # the autopilot's log
 file = "{name}.csv"         # "{name}.onboard.csv" by default; "{name}.csv": the take itself
