@@ -149,8 +149,9 @@ def read_arrays(path, wanted: list[tuple[str, str]], time: tuple[str, str] | Non
     if time is not None:
         key, a, idx = raw[time[1]]
         if a.size != max(a.shape, default=0) or idx:
-            raise FlightDataError(f"{key}: {time[1]!r} in {path.name} is {' x '.join(map(str, a.shape))}, "
-                                  "not a vector of time stamps")
+            shape = " x ".join(map(str, a.shape))
+            raise FlightDataError(f"{key}: {time[1]!r} in {path.name} is {shape}, not a vector "
+                                  "of time stamps")
         n = a.size
     else:
         n = max(next(iter(raw.values()))[1].shape)

@@ -1,9 +1,9 @@
 """A lab's own recording read through its recording map (`_map.py`) into a `RawTake`.
 
 The take is a CSV (or tab-separated) file with one header row, or an array file (MATLAB,
-NumPy, HDF5: `_arrays.py`). Rows that repeat a time stamp are merged. Its time base is made uniform (`fwid.data._timebase`),
-its pose turned into north-east-down with body axes forward-right-down; the autopilot's
-columns (in the take itself, or in a log of its own on its own clock) give the controls
+NumPy, HDF5: `_arrays.py`). Rows that repeat a time stamp are merged. Its time base is made
+uniform (`fwid.data._timebase`), its pose turned into north-east-down with body axes
+forward-right-down; the autopilot's columns (in the take itself, or in a log of its own on its own clock) give the controls
 through the map's affine maps and the onboard sensors in body axes and SI units. When the
 map names an accelerometer or a gyro in the take's own file, the pose's convention is
 checked against them (`_imu.choose_convention`) before anything is smoothed. A tracking
