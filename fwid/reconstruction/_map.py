@@ -1,5 +1,6 @@
-"""The recording map: a TOML file that says where a lab's own CSV files keep the time, the
-pose, the onboard sensors and the controls, in which units and axes.
+"""The recording map: a TOML file that says where a lab's own files (CSV, TSV, or MATLAB,
+NumPy and HDF5 arrays: `_arrays.py`) keep the time, the pose, the onboard sensors and the
+controls, in which units and axes.
 
 ```toml
 [time]                      # the time base of the file that holds the pose
@@ -10,9 +11,10 @@ unit = "ms"                 # (or frame_column = "Frame" and rate = 120.0, Hz)
 position = ["otX0", "otY0", "otZ0"]
 position_unit = "m"         # m | mm
 frame = "z-up"              # ned | y-up | z-up, world and body axes alike
-attitude = ["otRoll0", "otPitch0", "otYaw0"]   # roll, pitch, yaw; or four quaternion columns
+attitude = ["otRoll0", "otPitch0", "otYaw0"]   # roll, pitch, yaw; or 4 quaternion, 9 matrix columns
 attitude_unit = "deg"       # deg | rad
-euler = "ZYX"               # rotation order; or quaternion = "wxyz" | "xyzw"
+euler = "ZYX"               # intrinsic order (six); or quaternion = "wxyz" | "xyzw"
+# attitude_form = "matrix"  # euler | quaternion | matrix (row-major, body to lab)
 
 [onboard]                   # the autopilot's log
 file = "{name}.csv"         # "{name}.onboard.csv" by default; "{name}.csv": the take itself
@@ -54,13 +56,17 @@ RATE_UNITS = {"deg/s": 3.141592653589793 / 180.0, "rad/s": 1.0}
 SENSOR_AXES = ("frd", "flu")
 EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 QUATERNION_ORDERS = ("wxyz", "xyzw")
+#: How the attitude columns hold the attitude, by their number: 3, 4 or 9.
+ATTITUDE_FORMS = {"euler": 3, "quaternion": 4, "matrix": 9}
+#: The suffixes of a take's file (the take itself as `[onboard] file`: "{name}" and one of them).
+TAKE_SUFFIXES = (".csv", ".tsv", ".mat", ".npz", ".h5", ".hdf5")
 CONTROLS = ("de", "dr", "f")
 DEFAULT_LOG = "{name}.onboard.csv"
 
 _KEYS = {
     "time": {"column", "unit", "frame_column", "rate"},
     "tracking": {"position", "position_unit", "frame", "attitude", "attitude_unit", "euler",
-                 "quaternion"},
+                 "quaternion", "attitude_form"},
     "onboard": {"file", "acc", "acc_unit", "gyro", "gyro_unit", "axes", "time", "time_unit"},
     "inputs": set(CONTROLS),
 }
@@ -99,11 +105,35 @@ class RecordingMap(NamedTuple):
     gyro_scale: float
     axes: str
     inputs: dict[str, Control]
+    #: euler | quaternion | matrix (nine columns, row-major, body to lab)
+    attitude_form: str = "euler"
 
     @property
     def log_is_take(self) -> bool:
-        """Whether the autopilot's columns are in the take's own file."""
-        return self.log_file == "{name}.csv"
+        """Whether the autopilot's columns are in the take's own file (`[onboard] file` is
+        `"{name}"` with a take's suffix, `.gz` allowed)."""
+        rest = self.log_file.removeprefix("{name}").removesuffix(".gz")
+        return self.log_file.startswith("{name}") and rest in TAKE_SUFFIXES
+
+    def named(self, take: bool = True) -> list[tuple[str, str]]:
+        """`(key, column)` of every column the map reads from the take (`take`: the pose,
+        and the autopilot's columns when they are in the take) or from the autopilot's own
+        log, the key as the map writes it (for messages)."""
+        out = []
+        if take:
+            out += [("[tracking] position", c) for c in self.position or ()]
+            out += [("[tracking] attitude", c) for c in self.attitude or ()]
+        if not take or self.log_is_take:
+            out += [(f"[inputs] {k}", c) for k, ctl in self.inputs.items() for c in ctl.columns]
+            out += [("[onboard] acc", c) for c in self.acc or ()]
+            out += [("[onboard] gyro", c) for c in self.gyro or ()]
+        return out
+
+    def time_named(self) -> tuple[str, str]:
+        """`(key, column)` of the take's time base."""
+        if self.time_column is None and self.frame_column is not None:
+            return "[time] frame_column", self.frame_column
+        return "[time] column", self.time_column
 
     def log_path(self, take) -> Path:
         """The autopilot log of the take at `take` (a path)."""
@@ -193,14 +223,19 @@ def read_map(path) -> RecordingMap:
     if tr and time_column is None and frame_column is None:
         raise _fail(path, "[time]", "give column (and unit) or frame_column and rate")
     position = _columns(path, "tracking", tr, "position", (3,))
-    attitude = _columns(path, "tracking", tr, "attitude", (3, 4))
+    form = _choice(path, "tracking", tr, "attitude_form", ATTITUDE_FORMS)
+    attitude = _columns(path, "tracking", tr, "attitude",
+                        (ATTITUDE_FORMS[form],) if form else (3, 4, 9))
     if tr and (position is None or attitude is None):
-        raise _fail(path, "[tracking]", "needs position (3 columns) and attitude (3 or 4)")
+        raise _fail(path, "[tracking]", "needs position (3 columns) and attitude (3 Euler angles, "
+                    "4 quaternion components or 9 matrix elements)")
+    if attitude is not None and form is None:
+        form = {n: f for f, n in ATTITUDE_FORMS.items()}[len(attitude)]
     euler = quaternion = None
-    if attitude is not None and len(attitude) == 3:
+    if form == "euler":
         euler = _choice(path, "tracking", {"euler": str(tr.get("euler", "ZYX")).upper()},
                         "euler", EULER_ORDERS)
-    elif attitude is not None:
+    elif form == "quaternion":
         quaternion = _choice(path, "tracking", tr, "quaternion", QUATERNION_ORDERS, "wxyz")
     inputs = {}
     for k, v in inp.items():
@@ -228,4 +263,4 @@ def read_map(path) -> RecordingMap:
         ACC_UNITS[_choice(path, "onboard", ob, "acc_unit", ACC_UNITS, "m/s2")],
         _columns(path, "onboard", ob, "gyro", (3,)),
         RATE_UNITS[_choice(path, "onboard", ob, "gyro_unit", RATE_UNITS, "rad/s")],
-        _choice(path, "onboard", ob, "axes", SENSOR_AXES, "frd"), inputs)
+        _choice(path, "onboard", ob, "axes", SENSOR_AXES, "frd"), inputs, form or "euler")

@@ -1,11 +1,14 @@
 """A lab's own recording read through its recording map (`_map.py`) into a `RawTake`.
 
-The take is a CSV file with one header row. Its time base is made uniform (`fwid.data._timebase`),
-its pose turned into north-east-down with body axes forward-right-down; the autopilot's
-columns (in the take itself, or in a log of its own on its own clock) give the controls
+The take is a CSV (or tab-separated) file with one header row, or an array file (MATLAB,
+NumPy, HDF5: `_arrays.py`). Rows that repeat a time stamp are merged. Its time base is made
+uniform (`fwid.data._timebase`), its pose turned into north-east-down with body axes
+forward-right-down; the autopilot's columns (in the take itself, or in a log of its own on its own clock) give the controls
 through the map's affine maps and the onboard sensors in body axes and SI units. When the
 map names an accelerometer or a gyro in the take's own file, the pose's convention is
-checked against them (`_imu.choose_convention`) before anything is smoothed.
+checked against them (`_imu.choose_convention`) before anything is smoothed. A tracking
+stream slower than the log (many rows repeating the previous pose exactly) is taken at its
+fresh poses only, interpolated onto the log's rows (`_slow_tracking`).
 A Motive export (a map without `[tracking]`) keeps Motive's reader for the pose.
 """
 
@@ -17,7 +20,8 @@ import numpy as np
 
 from .._errors import FlightDataError
 from ..data._checks import check_time_unit
-from ._glitches import drop_glitches
+from ._arrays import is_array_file, read_arrays
+from ._glitches import drop_glitches, held_frames
 from ._imu import G0, SENSOR_TO_FRD, Convention, check_scales, choose_convention
 from ._map import TIME_UNITS, RecordingMap
 from ._raw import (
@@ -29,13 +33,20 @@ from ._rotations import (
 )
 from ..data._timebase import onto_grid, uniform_time
 
+#: The share of tracked rows repeating the previous pose beyond which the tracking is taken
+#: to run slower than the log (a tracking system drops far fewer frames than this).
+SLOW_TRACKING = 0.2
+
+
 def read_table(path, lines: list[str] | None = None):
     """A CSV file with one header row: `(columns, warnings)`, `columns` a dict of arrays
     (empty cells NaN). A last line cut short (a log stopped mid-write) is dropped with a
-    warning."""
+    warning. A `.tsv` file (gzip too) is split at tabs."""
     lines = read_lines(path) if lines is None else lines
     if not lines:
         raise FlightDataError(f"{path}: empty file")
+    if str(path).lower().removesuffix(".gz").endswith(".tsv"):
+        lines = [ln.replace("\t", ",") for ln in lines]
     header = [h.strip() for h in lines[0].rstrip("\r\n").split(",")]
     body = [ln for ln in lines[1:] if ln.strip()]
     notes = []
@@ -44,6 +55,65 @@ def read_table(path, lines: list[str] | None = None):
         notes.append("the last line is cut short; dropped")
     data = parse_rows(body, str(path), 2, width=len(header))
     return {h: data[:, i] for i, h in enumerate(header) if h}, notes
+
+
+def read_columns(path, m: RecordingMap, take: bool = True, lines: list[str] | None = None):
+    """The columns the map `m` reads from a take (`take`) or from its autopilot's own log:
+    `(columns, warnings)`, from a CSV table or an array file (`_arrays.read_arrays`)."""
+    if not is_array_file(path):
+        return read_table(path, lines)
+    time = m.time_named() if take else ("[onboard] time", m.log_time)
+    try:
+        return read_arrays(path, m.named(take), time)
+    except FlightDataError as e:
+        raise FlightDataError(f"{e} (map {m.path})") from None
+
+
+def _merge_repeated_times(cols: dict, t: np.ndarray, path):
+    """Rows that repeat the previous row's time stamp merged (the first kept), with a
+    warning: `(cols, t, warnings)`."""
+    again = np.concatenate([[False], np.diff(t) == 0])
+    if not again.any():
+        return cols, t, []
+    keep = ~again
+    note = (f"{int(again.sum())} row(s) repeat the previous row's time stamp (first at "
+            f"t = {t[np.argmax(again)]:.6g} s): merged, the first row of each kept")
+    return {k: v[keep] for k, v in cols.items()}, t[keep], [note]
+
+
+def _slow_tracking(t, quat, pos, seen, path, rate_log):
+    """A tracking stream slower than the log: `(held, rate, warnings)`, `held` the rows that
+    repeat the previous pose exactly and `rate` (Hz) the fresh poses' rate, when more than
+    `SLOW_TRACKING` of the tracked rows are held; else `(None, None, [])`."""
+    held = held_frames(quat, pos, seen)
+    if held.sum() <= SLOW_TRACKING * max(int(seen.sum()), 1):
+        return None, None, []
+    fresh = np.flatnonzero(seen & ~held)
+    rate = (len(fresh) - 1) / float(t[fresh[-1]] - t[fresh[0]])
+    note = (f"the tracking runs at about {rate:.3g} Hz, slower than the log's {rate_log:.3g} Hz "
+            f"({int(held.sum())} of {int(seen.sum())} rows repeat the previous pose): the pose "
+            "is taken at its fresh samples and interpolated onto the log's rows; the controls "
+            "and onboard signals keep the log's rate")
+    return held, rate, [note]
+
+
+def _fill_held(t, pos, att, tracked, held, m: RecordingMap):
+    """The recorded positions and attitude columns on the held rows between tracked ones,
+    interpolated in time from the tracked rows (Euler angles unwrapped, quaternions' signs
+    made continuous first); and `tracked` with those rows added."""
+    idx = np.flatnonzero(tracked)
+    rows = np.arange(len(t))
+    inside = held & ~tracked & (rows > idx[0]) & (rows < idx[-1])
+    src = att[idx].astype(float)
+    if m.euler is not None:
+        src = np.unwrap(src * m.angle_scale, axis=0) / m.angle_scale
+    elif m.quaternion is not None:
+        src = continuous_sign(src)
+    pos, att = pos.astype(float), att.astype(float)
+    for a, known in ((pos, pos[idx]), (att, src)):
+        for i in range(a.shape[1]):
+            a[inside, i] = np.interp(t[inside], t[idx], known[:, i])
+    return pos, att, tracked | inside
 
 
 def _pick(cols: dict, names, path, m: RecordingMap) -> np.ndarray:
@@ -130,6 +200,10 @@ def _attitude_matrices(att, m: RecordingMap, path):
     """Body -> world matrices of the recorded attitude columns (NaN rows stay NaN-free: the
     identity, masked by `tracked`), and the rows that hold a usable attitude."""
     ok = np.all(np.isfinite(att), 1)
+    if m.attitude_form == "matrix":
+        M = np.where(ok[:, None], att, np.eye(3).ravel()).reshape(-1, 3, 3)
+        U, _, Vt = np.linalg.svd(M)  # the nearest rotation (rounding in the recorded elements)
+        return U @ Vt, ok & (np.linalg.det(M) > 0)
     if m.euler is not None:
         R = euler_to_matrix_ordered(np.where(ok[:, None], att * m.angle_scale, 0.0), m.euler)
         return R, ok
@@ -151,9 +225,11 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
       contradict;
     - `max_dropout`: the longest gap (s) bridged.
     """
-    cols, notes = read_table(path, lines)
+    cols, notes = read_columns(path, m, True, lines)
     t = _time(cols, path, m, m.time_column, m.time_scale)
     _check_time_unit(t, path, m)
+    cols, t, more = _merge_repeated_times(cols, t, path)
+    notes += more
     grid, how, more = uniform_time(t, path, 2, m.time_column or m.frame_column)
     notes += more
     pos = _pick(cols, m.position, path, m) * m.position_scale
@@ -166,9 +242,21 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
         _check_radians(att, path, m)
     R, ok_att = _attitude_matrices(att, m, path)
     seen = ok_att & np.all(np.isfinite(pos), 1)
+    quat, at = (np.where(seen[:, None], matrix_to_quat(R), np.nan),
+                np.where(seen[:, None], pos, np.nan))
+    held, tracking_rate, said = _slow_tracking(t, quat, at, seen, path,
+                                               1.0 / float(np.median(np.diff(t))))
+    notes += said
     # glitches (held poses, flips, jumps) are the same in any frame: dropped before the check
-    tracked, said = drop_glitches(t, np.where(seen[:, None], matrix_to_quat(R), np.nan), seen,
-                                  np.where(seen[:, None], pos, np.nan), path)
+    if held is None:
+        tracked, said = drop_glitches(t, quat, seen, at, path)
+    else:  # a slower tracking's fresh poses alone: its repeats are no glitches
+        fresh = np.flatnonzero(seen & ~held)
+        tracked = np.zeros(len(t), bool)
+        tracked[fresh], said = drop_glitches(t[fresh], quat[fresh], np.ones(len(fresh), bool),
+                                             at[fresh], path, held=False)
+        pos, att, tracked = _fill_held(t, pos, att, tracked, held, m)
+        R, _ = _attitude_matrices(att, m, path)
     notes += said
     sensors = mapped_controls(cols, path, m) if m.log_is_take else {}
     convention = Convention(frame or m.frame, (1.0, 1.0, 1.0), m.axes)
@@ -219,7 +307,7 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
               + (f", Euler {m.euler}" if m.euler else "") + ")")
     return RawTake(take_name(path), str(path), source, convention.frame, t, pos, q, tracked,
                    sensors if m.log_is_take else None, log, gaps, notes,
-                   convention if checked else None)
+                   convention if checked else None, tracking_rate)
 
 
 def read_mapped_log(path, m: RecordingMap, take) -> OnboardLog | None:
@@ -227,7 +315,7 @@ def read_mapped_log(path, m: RecordingMap, take) -> OnboardLog | None:
     and the mapped controls and sensors; None (no controls) when there is no such file."""
     if not Path(path).is_file():
         return None
-    cols, _ = read_table(path)
+    cols, _ = read_columns(path, m, take=False)
     t = _pick(cols, [m.log_time], path, m)[:, 0] * m.log_time_scale
     grid, how, _ = uniform_time(t, str(path), 2, m.log_time)
     out = {k: onto_grid(v, how) for k, v in mapped_controls(cols, path, m).items()}

@@ -433,6 +433,7 @@ def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> Reconstruct
         "clock_offset_s": 0.0 if clock is None else clock.offset,
         "dropouts": gaps, "warnings": warnings,
         "rate_hz": 1.0 / take.dt, "duration_s": float(t[-1] - t[0]),
+        **({} if take.tracking_rate is None else {"tracking_rate_hz": take.tracking_rate}),
         "clock": None if clock is None else {
             "offset_s": clock.offset, "std_s": clock.std, "corr": clock.corr,
             "rms_rad_s": clock.rms, "given": clock.given},

@@ -53,6 +53,9 @@ class RawTake(NamedTuple):
     warnings: list[str]
     #: the pose convention used, when onboard sensors checked it (`_imu.Convention`)
     convention: object = None
+    #: the tracking's own rate (Hz) when it is slower than the time base's (its poses
+    #: repeated on the rows between), else None
+    tracking_rate: float | None = None
 
     @property
     def dt(self) -> float:
@@ -60,10 +63,12 @@ class RawTake(NamedTuple):
 
 
 def take_name(path) -> str:
-    """A take's name: its file name without `.csv`, `.tsv`, `.mat` (and `.gz`)."""
+    """A take's name: its file name without `.csv` or `.csv.gz` (or `.tsv`, `.mat`, `.npz`,
+    `.h5`, `.hdf5`)."""
     name = Path(path).name.removesuffix(".gz")
-    for suffix in (".csv", ".tsv", ".mat"):
-        name = name.removesuffix(suffix)
+    for suffix in (".csv", ".tsv", ".mat", ".npz", ".h5", ".hdf5"):
+        if name.endswith(suffix):
+            return name.removesuffix(suffix)
     return name
 
 

@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 from .._errors import FlightDataError, InputError
+from ._arrays import is_array_file
 from ._fwid_raw import read_fwid_raw
 from ._map import RecordingMap, read_map
 from ._mapped import read_mapped, read_mapped_log
@@ -53,7 +54,8 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     **Arguments:**
     - `path`: a fwid raw CSV, a Motive CSV export (its first line starts `Format Version`),
       a Vicon Nexus CSV export (a `Segments` or `Objects` block), a Qualisys QTM 6DOF TSV
-      (first line `NO_OF_FRAMES`) or MATLAB (`.mat`) export;
+      (first line `NO_OF_FRAMES`) or MATLAB (`.mat`) export; or, through a map, a lab's CSV,
+      TSV, MATLAB (`.mat`), NumPy (`.npz`) or HDF5 file;
     - `body`: the rigid body's (segment's) name (needed when the take holds several);
     - `frame`: `ned`, `y-up` or `z-up`: the recording's world frame, body axes alike
       (default: `ned` for the fwid raw CSV, `y-up` for Motive, `z-up` for Vicon and QTM);
@@ -76,15 +78,22 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     path = Path(path)
     if not path.is_file():
         raise FlightDataError(f"{path}: no such file")
-    if is_qtm_mat(path):
-        return read_qtm_mat(str(path), body=body, frame=frame or "z-up", onboard=onboard,
-                            max_dropout=max_dropout)
-    lines = read_lines(path)
-    if not lines:
-        raise FlightDataError(f"{path}: empty file")
     m = recording_map
     if m is not None and not isinstance(m, RecordingMap):
         m = read_map(m)
+    if m is None and is_qtm_mat(path):
+        return read_qtm_mat(str(path), body=body, frame=frame or "z-up", onboard=onboard,
+                            max_dropout=max_dropout)
+    if is_array_file(path):
+        if m is None or m.position is None:
+            raise FlightDataError(f"{path}: an array file is read through a recording map with "
+                                  "a [tracking] section (--map MAP.toml); see the guide's page "
+                                  "on recordings")
+        return read_mapped(str(path), m, frame=frame, strict_frame=strict_frame,
+                           max_dropout=max_dropout)
+    lines = read_lines(path)
+    if not lines:
+        raise FlightDataError(f"{path}: empty file")
     if lines[0].startswith("Format Version"):
         take = read_motive(str(path), lines, body=body, frame=frame or "y-up",
                            onboard=False if m is not None else onboard, max_dropout=max_dropout)

@@ -39,10 +39,10 @@ f = { column = ["left", "right"], offset = 100, scale = 0.001 }
 """
 
 
-def write_lab_take(path, motion, t, *, pitch_sign=1.0, seed=0, jitter=True, cut_last=True):
-    """A lab's log: ms ticks (jittered by a tick), the pose in a z-up frame in mm with ZYX
-    Euler angles in degrees (pitch logged with `pitch_sign`), the accelerometer in g in
-    forward-left-up axes, a servo and two motor commands."""
+def lab_columns(motion, t, *, pitch_sign=1.0, seed=0, jitter=True):
+    """A lab's logged columns: ms ticks (jittered by a tick), the pose in a z-up frame in mm
+    with ZYX Euler angles in degrees (pitch logged with `pitch_sign`), the accelerometer in g
+    in forward-left-up axes, a servo and two motor commands."""
     rng = np.random.default_rng(seed)
     pos, R = noisy(motion, t, rng)
     pos_z, R_z = pos @ Z_UP.T, Z_UP @ R @ Z_UP.T
@@ -55,10 +55,16 @@ def write_lab_take(path, motion, t, *, pitch_sign=1.0, seed=0, jitter=True, cut_
         tick[len(t) // 2] += 1
     servo = 32767 + 1e4 * np.sin(2 * np.pi * 0.5 * t)
     motor = 100 + 12000.0 + 0 * t
-    lines = ["tick, X, Y, Z, roll, pitch, yaw, ax, ay, az, servo, left, right"]
-    for i in range(len(t)):
-        row = [tick[i], *(pos_z[i] * 1e3), ypr[i, 2], pitch_sign * ypr[i, 1], ypr[i, 0],
-               *acc[i], servo[i], motor[i], motor[i]]
+    return {"tick": tick, "X": pos_z[:, 0] * 1e3, "Y": pos_z[:, 1] * 1e3, "Z": pos_z[:, 2] * 1e3,
+            "roll": ypr[:, 2], "pitch": pitch_sign * ypr[:, 1], "yaw": ypr[:, 0],
+            "ax": acc[:, 0], "ay": acc[:, 1], "az": acc[:, 2], "servo": servo, "left": motor,
+            "right": motor}
+
+
+def write_columns(path, cols, cut_last=False):
+    """`cols` as a CSV file with one header row (numbers to 6 decimals)."""
+    lines = [", ".join(cols)]
+    for row in zip(*cols.values()):
         lines.append(", ".join(f"{v:.6f}" if not isinstance(v, (int, np.integer)) else str(v)
                                for v in row))
     if cut_last:
@@ -66,6 +72,12 @@ def write_lab_take(path, motion, t, *, pitch_sign=1.0, seed=0, jitter=True, cut_
     path.write_text("\n".join(lines) + "\n")
     write_vehicle(path.parent)
     return path
+
+
+def write_lab_take(path, motion, t, *, pitch_sign=1.0, seed=0, jitter=True, cut_last=True):
+    """A lab's log (`lab_columns`) as a CSV file, its last line cut short (`cut_last`)."""
+    return write_columns(path, lab_columns(motion, t, pitch_sign=pitch_sign, seed=seed,
+                                           jitter=jitter), cut_last)
 
 
 @pytest.fixture(scope="module")

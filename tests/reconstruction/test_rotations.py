@@ -55,3 +55,22 @@ def test_euler_orders_against_axis_products():
                                    atol=1e-13)
     # a rotation about z alone turns x into y (right-handed)
     np.testing.assert_allclose(axis_rotation("Z", np.pi / 2) @ [1, 0, 0], [0, 1, 0], atol=1e-15)
+
+
+def test_euler_orders_round_trip_against_scipy():
+    """Each order, angles given as roll, pitch, yaw, is scipy's upper-case (intrinsic)
+    `Rotation.from_euler` with the angles in that order; and back through `as_euler`."""
+    from scipy.spatial.transform import Rotation
+
+    from fwid.reconstruction._rotations import euler_to_matrix_ordered
+
+    rng = np.random.default_rng(5)
+    rpy = rng.uniform(-1.2, 1.2, (9, 3))
+    for order in ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"):
+        pick = ["XYZ".index(ax) for ax in order]
+        R = euler_to_matrix_ordered(rpy, order)
+        np.testing.assert_allclose(R, Rotation.from_euler(order, rpy[:, pick]).as_matrix(),
+                                   atol=1e-13, err_msg=order)
+        back = np.empty_like(rpy)
+        back[:, pick] = Rotation.from_matrix(R).as_euler(order)
+        np.testing.assert_allclose(back, rpy, atol=1e-10, err_msg=order)
