@@ -45,9 +45,9 @@ def raw_files(paths) -> list[Path]:
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
              onboard=None, max_dropout: float = MAX_DROPOUT, recording_map=None,
              strict_frame: bool = False) -> RawTake:
-    """Read one raw take (a fwid raw CSV, a Motive, Vicon Nexus or Qualisys QTM export, or a
-    lab's file through a map).
+    """Read one raw take: a fwid raw CSV, a tracking export, or a lab's file through a map.
 
+    The exports: Motive, Vicon Nexus and Qualisys QTM.
     The take comes back in north-east-down, body axes forward-right-down (the guide's pages
     on raw recordings and on your lab's recordings).
 
