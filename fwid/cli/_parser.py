@@ -171,7 +171,8 @@ def parser() -> argparse.ArgumentParser:
                     help="t_tracking = t_onboard + S, instead of finding it from the gyro")
     rc.add_argument("--max-dropout", type=float, default=0.1, metavar="S",
                     help="longest tracking gap bridged (s); the take is split at longer ones "
-                    "and its longest airborne stretch kept")
+                    "and each airborne stretch of 5 s made a flight (NAME.csv the longest, "
+                    "NAME_2.csv ... the others)")
     rc.add_argument("--keep-ground", action="store_true",
                     help="keep the whole record: no cut to where the vehicle is airborne "
                     "(the rests on the ground are still named in reconstruction.json)")

@@ -25,7 +25,8 @@ def reconstruct(args) -> int:
         read_map(args.recording_map)  # a bad map: one line before any work
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
     # worker processes for the per-take work (reading, clocks, writing, figures)
-    pool = start(len(raw_files(args.raw)), preload=SCIPY + (FIGURES if args.figures else ()))
+    files = raw_files(args.raw)
+    pool = start(len(files), preload=SCIPY + (FIGURES if args.figures else ()))
     try:
         result = fwid.reconstruct(args.raw, body=args.body, frame=args.frame,
                                   onboard=args.onboard, clock_offset=args.clock_offset,
@@ -41,7 +42,9 @@ def reconstruct(args) -> int:
         if pool is not None:
             pool.shutdown()
     n = len(result.flights)
-    print(f"fwid: reconstructed {n} of {n + len(result.failures)} takes into {out}/ "
+    k = len({fl.entry["source"] for fl in result.flights})  # a take may give several flights
+    several = f" ({n} flights)" if n != k else ""
+    print(f"fwid: reconstructed {k} of {len(files)} takes{several} into {out}/ "
           f"({len(written)} files, {time.perf_counter() - t0:.1f} s)")
     for path, msg in result.failures:
         print(f"fwid: error: {msg}", file=sys.stderr)

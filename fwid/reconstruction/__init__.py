@@ -31,8 +31,8 @@ The modules:
 - The autopilot's clock against the tracking clock, and its signals resampled onto the
   take's time base without aliasing (`_clock.py`).
 - Where a take is airborne: the rests on the ground from the pose (and the logged wing beat),
-  the take cut to its longest airborne stretch between them and between tracking losses longer
-  than `max_dropout` (`_airborne.py`).
+  the take cut to its airborne stretches between them and between tracking losses longer
+  than `max_dropout`, each long enough a flight of its own (`_airborne.py`).
 - States and loads from the full nonlinear rigid-body equations (`_loads.py`); the frame
   check and residuals (`_checks.py`); the pipeline, [`fwid.reconstruct`][] (`_pipeline.py`);
   writing the flights and `reconstruction.json` atomically (`_write.py`); the per-take work

@@ -16,8 +16,13 @@ clears the rest's height before it by `CLEARANCE` to where it last clears the re
 after it by `CLEARANCE` (lift-off and touch-down, in ground effect and with the floor's
 reaction in the loads, are left out whatever their duration); a stretch that never clears
 it (a hop, the vehicle pushed over the floor) is not a flight. Stretches are split where the
-body is lost for longer than `max_dropout` (nothing to bridge), and the longest is kept;
-when anything was cut it must last `MIN_AIRBORNE`.
+body is lost for longer than `max_dropout` (nothing to bridge). When anything was cut, each
+stretch that lasts `MIN_AIRBORNE` becomes a flight of its own and the shorter ones are left
+out (named in the warnings); at least one must last so.
+
+**Naming the flights.** The longest stretch keeps the take's name (`NAME.csv`: a take cut
+to one stretch is named as it always was); the others follow in time order as `NAME_2`,
+`NAME_3`, ... (`stretch_name`).
 
 A take that flies throughout (fwid's own simulated takes) is never still, so nothing is cut.
 """
@@ -51,16 +56,24 @@ MIN_AIRBORNE = 5.0
 
 
 class Airborne(NamedTuple):
-    """Where a take is airborne: `keep` the samples kept (`slice`), `ground` the
-    `[start, end]` times on the ground, `others` the airborne stretches left out, `gaps`
-    the tracking losses the take was split at, `warnings` what was cut and why (one
-    sentence each)."""
+    """Where a take is airborne: `keep` the samples of its longest stretch (`slice`),
+    `ground` the `[start, end]` times on the ground, `others` the airborne stretches left
+    out (under `MIN_AIRBORNE`), `gaps` the tracking losses the take was split at, `warnings`
+    what was cut and why (one sentence each), `more` the further stretches long enough to
+    be flights of their own (slices, in time order: `NAME_2`, `NAME_3`, ...)."""
 
     keep: slice
     ground: list[list[float]]
     others: list[list[float]]
     gaps: list[list[float]]
     warnings: list[str]
+    more: list[slice] = []
+
+
+def stretch_name(name: str, k: int) -> str:
+    """The name of a take's `k`-th flight (0: the longest stretch, the take's own name;
+    1, 2, ...: the others in time order, `NAME_2`, `NAME_3`, ...)."""
+    return name if k == 0 else f"{name}_{k + 1}"
 
 
 def runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -127,7 +140,8 @@ def _times(spans) -> str:
 
 def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
              tracked: Bool[np.ndarray, " n"], f: Float[np.ndarray, " n"] | None = None, *,
-             max_dropout: float, keep_ground: bool = False, path: str = "") -> Airborne:
+             max_dropout: float, keep_ground: bool = False, path: str = "",
+             name: str = "") -> Airborne:
     """The airborne stretch of a take to keep (module docstring).
 
     **Arguments:**
@@ -136,7 +150,7 @@ def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
     - `max_dropout`: the longest tracking loss (s) bridged; the take is split at longer ones;
     - `keep_ground`: keep the rests on the ground too (the wings at rest are still cut: a
       flight's `f` must be positive), and say where they are;
-    - `path`: the take, for messages.
+    - `path`: the take, for messages; `name`: its name, for the flights' names in them.
 
     **Returns:** an `Airborne`. Raises a `FlightDataError` when the take is cut and no
     stretch of `MIN_AIRBORNE` is left.
@@ -175,7 +189,10 @@ def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
                                        keep_ground))
     k = max(range(len(split)), key=lambda i: t[split[i][1] - 1] - t[split[i][0]])
     a, b = split[k]
-    others = [_span(t, *s) for i, s in enumerate(split) if i != k]
+    long = [i for i, (p, q) in enumerate(split)
+            if i != k and (not cut or t[q - 1] - t[p] >= MIN_AIRBORNE)]
+    others = [_span(t, *s) for i, s in enumerate(split) if i != k and i not in long]
+    more = [slice(*split[i]) for i in long]
     notes = []
     what = _ground_words(rest, wings_off)
     if on and keep_ground:
@@ -183,17 +200,29 @@ def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
                      "(--keep-ground)" + (", but for the wings at rest: a flight's f must be "
                                           "positive" if wings_off.any() else ""))
     elif on:
-        notes.append(f"the vehicle is on the ground ({what}) at t = {_times(on)}: the flight "
-                     f"is cut to t = {t[a]:.6g} to {t[b - 1]:.6g} s, where it is airborne "
+        where = ("the take is cut to its airborne stretches (below)" if more else
+                 f"the flight is cut to t = {t[a]:.6g} to {t[b - 1]:.6g} s")
+        notes.append(f"the vehicle is on the ground ({what}) at t = {_times(on)}: {where}, "
+                     f"where it is airborne "
                      f"({CLEARANCE:g} m clear of its rest height), because the floor's reaction "
                      "is no aerodynamic load (--keep-ground keeps it all)")
-    if others:
-        why = (f"; the take is split where the body is lost for longer than the "
-               f"{max_dropout:g} s bridged (t = {_times(gaps)})" if gaps else "")
-        kind = "" if keep_ground else "airborne "
+    why = (f"; the take is split where the body is lost for longer than the "
+           f"{max_dropout:g} s bridged (t = {_times(gaps)})" if gaps else "")
+    kind = "" if keep_ground else "airborne "
+    short = (f"; left out, under the {MIN_AIRBORNE:g} s an identification needs: "
+             f"t = {_times(others)}" if others else "")
+    if more:
+        name = name or "take"
+        flights = ", ".join(f"t = {t[s.start]:.6g} to {t[s.stop - 1]:.6g} s "
+                            f"({stretch_name(name, j)}.csv)"
+                            for j, s in enumerate([slice(a, b)] + more))
+        notes.append(f"the take gives {len(more) + 1} flights, one per {kind}stretch long "
+                     f"enough to identify (the longest keeps the take's name): "
+                     f"{flights}{short}{why}")
+    elif others:
         notes.append(f"the longest {kind}stretch, t = {t[a]:.6g} to {t[b - 1]:.6g} s, is "
                      f"kept; left out: t = {_times(others)}{why}")
-    return Airborne(slice(a, b), on, others, gaps, notes)
+    return Airborne(slice(a, b), on, others, gaps, notes, more)
 
 
 def _ground_words(rest, wings_off) -> str:
@@ -236,19 +265,30 @@ def _refusal(path, t, split, on, gaps, lost, dt, max_dropout, keep_ground) -> st
             "a flight" + ("" if keep_ground else ", or --keep-ground to keep the whole record"))
 
 
+def _cut(take: RawTake, f, s: slice, part: int, parts: int, name: str, warnings):
+    """The take (and `f`) cut to the samples `s`, named `name`, its stretch noted."""
+    lo, hi = take.t[s][0], take.t[s][-1]
+    take = take._replace(
+        name=name, t=take.t[s], pos=take.pos[s], quat=take.quat[s], tracked=take.tracked[s],
+        controls=None if take.controls is None else {k: v[s] for k, v in take.controls.items()},
+        dropouts=[g for g in take.dropouts if g[0] >= lo and g[1] <= hi],
+        warnings=take.warnings + warnings,
+        stretch={"t_s": [float(lo), float(hi)], "part": part, "of": parts})
+    return take, (None if f is None else f[s])
+
+
 def cut_take(take: RawTake, f=None, *, max_dropout: float, keep_ground: bool = False):
-    """`(take, f, airborne)`: the take (and its flapping frequency `f` on its samples, when
-    given) cut to its airborne stretch (`airborne`), its warnings extended by the cut's.
+    """`(flights, airborne)`: the take (and its flapping frequency `f` on its samples, when
+    given) cut to each airborne stretch long enough to identify (`airborne`), as a list of
+    `(take, f)`, the longest first (named as the take), then the others in time order
+    (`NAME_2`, `NAME_3`, ...); each take's warnings are extended by the cut's, and its
+    `stretch` says which part of the take it is (`part` of `of`, in time order).
     The wing beat is the take's own logged `f` (the fwid raw CSV, a map's take); a Motive
     take's log runs on a clock not yet aligned, so its pose alone tells."""
     logged = take.controls.get("f") if take.controls is not None else None
     air = airborne(take.t, take.pos, take.tracked, logged, max_dropout=max_dropout,
-                   keep_ground=keep_ground, path=take.path)
-    s = air.keep
-    lo, hi = take.t[s][0], take.t[s][-1]
-    take = take._replace(
-        t=take.t[s], pos=take.pos[s], quat=take.quat[s], tracked=take.tracked[s],
-        controls=None if take.controls is None else {k: v[s] for k, v in take.controls.items()},
-        dropouts=[g for g in take.dropouts if g[0] >= lo and g[1] <= hi],
-        warnings=take.warnings + air.warnings)
-    return take, (None if f is None else f[s]), air
+                   keep_ground=keep_ground, path=take.path, name=take.name)
+    order = sorted([air.keep] + air.more, key=lambda s: s.start)
+    parts = [air.keep] + air.more
+    return [_cut(take, f, s, order.index(s) + 1, len(parts), stretch_name(take.name, k),
+                 air.warnings) for k, s in enumerate(parts)], air

@@ -319,8 +319,8 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
         try:
             fl, note = _flapping(take)
             take = take if note is None else take._replace(warnings=take.warnings + [note])
-            take, fl, _ = cut_take(take, fl, max_dropout=max_dropout, keep_ground=keep_ground)
-            cut.append(((f, take, veh, vpath), fl))
+            pieces, _ = cut_take(take, fl, max_dropout=max_dropout, keep_ground=keep_ground)
+            cut += [((f, piece, veh, vpath), fp) for piece, fp in pieces]
         except FwidError as e:
             failures[str(f)] = str(e)
             say(f"{f.name}: failed (below)")
@@ -345,7 +345,7 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
                     cols[k] = cols.pop(f"{k}_gyro")
             stage.append((i, slice(None), cols, None, att0[i]))
         elif isinstance(aligned[i], Failed):
-            failures[str(f)] = aligned[i].message
+            failures[_key(f, take)] = aligned[i].message
             say(f"{f.name}: failed (below)")
         else:
             s, cols, clock = aligned[i]
@@ -378,11 +378,19 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             say(f"{take.name}: {len(flights[i].columns['t'])} samples at {e['rate_hz']:.4g} Hz"
                 f"{off}, {count(len(e['dropouts']), 'dropout')}")
         except FwidError as e:
-            failures[str(f)] = str(e)
+            failures[_key(f, take)] = str(e)
             say(f"{f.name}: failed (below)")
     order = {str(f): k for k, f in enumerate(files)}
-    fails = sorted(failures.items(), key=lambda kv: order.get(kv[0], 0))
+    fails = sorted(failures.items(),
+                   key=lambda kv: order.get(kv[0], order.get(kv[0].rsplit(" (", 1)[0], 0)))
     return Reconstruction([fl for fl in flights if fl is not None], fails)
+
+
+def _key(f, take: RawTake) -> str:
+    """What a failure is filed under: the file, and which of its flights when it gives
+    several (a flight of a take split into stretches may fail while the others go on)."""
+    several = take.stretch is not None and take.stretch["of"] > 1
+    return f"{f} ({take.name})" if several else str(f)
 
 
 def _gyro(stage) -> bool:
@@ -432,6 +440,7 @@ def _assemble(take: RawTake, s, cols, clock, att, tr, veh, vpath) -> Reconstruct
         "flight": f"{take.name}.csv", "source": f"{take.source}: {Path(take.path).name}",
         "clock_offset_s": 0.0 if clock is None else clock.offset,
         "dropouts": gaps, "warnings": warnings,
+        **({} if take.stretch is None else {"stretch": take.stretch}),
         "rate_hz": 1.0 / take.dt, "duration_s": float(t[-1] - t[0]),
         **({} if take.tracking_rate is None else {"tracking_rate_hz": take.tracking_rate}),
         "clock": None if clock is None else {

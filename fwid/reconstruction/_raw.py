@@ -56,6 +56,9 @@ class RawTake(NamedTuple):
     #: the tracking's own rate (Hz) when it is slower than the time base's (its poses
     #: repeated on the rows between), else None
     tracking_rate: float | None = None
+    #: the airborne stretch of the recording this take was cut to (`_airborne.cut_take`):
+    #: `t_s` `[t0, t1]`, `part` (1, 2, ... in time order) `of` how many flights it gives
+    stretch: dict | None = None
 
     @property
     def dt(self) -> float:

@@ -7,7 +7,8 @@ import pytest
 
 from fwid import FlightDataError
 from fwid.reconstruction import read_raw
-from fwid.reconstruction._airborne import CLEARANCE, airborne, cut_take
+from fwid.reconstruction._raw import RawTake
+from fwid.reconstruction._airborne import CLEARANCE, MIN_AIRBORNE, airborne, cut_take
 from fwid.synth import write_raw_flights
 
 DT = 0.01
@@ -68,14 +69,15 @@ def test_wings_at_rest_are_cut_even_when_the_ground_is_kept():
     assert T[air.keep][0] == pytest.approx(5.01) and T[air.keep][-1] == pytest.approx(34.99)
 
 
-def test_a_long_tracking_loss_splits_the_take_and_the_longest_stretch_is_kept():
+def test_a_long_tracking_loss_splits_the_take_and_a_short_stretch_is_left_out():
     pos, tracked = _profile()
-    tracked = tracked & ~((T >= 15.0) & (T < 15.5))
+    tracked = tracked & ~((T >= 12.0) & (T < 12.5))
     pos[~tracked] = np.nan
     air = airborne(T, pos, tracked, max_dropout=0.1)
-    assert T[air.keep][0] == pytest.approx(15.5) and T[air.keep][-1] > 30.0
-    assert len(air.others) == 1 and air.others[0][1] == pytest.approx(14.99)
-    assert air.gaps == [[15.0, pytest.approx(15.49)]]
+    assert T[air.keep][0] == pytest.approx(12.5) and T[air.keep][-1] > 30.0
+    assert len(air.others) == 1 and air.others[0][1] == pytest.approx(11.99)
+    assert air.more == []
+    assert air.gaps == [[12.0, pytest.approx(12.49)]]
     assert "left out: t = " in air.warnings[1] and "lost for longer than the 0.1 s" in air.warnings[1]
     whole = airborne(T, pos, tracked, max_dropout=1.0)  # bridged: one stretch
     assert whole.others == [] and T[whole.keep][0] < 10.0
@@ -104,5 +106,45 @@ def test_a_take_that_never_lifts_off_is_refused_naming_keep_ground():
 def test_nothing_is_cut_on_simulated_takes(tmp_path, raw):
     (path,) = write_raw_flights(tmp_path, raw=raw, n_flights=1, seed=3)
     take = read_raw(path, body="DelFly" if raw == "motive" else None, max_dropout=np.inf)
-    cut, _, air = cut_take(take, max_dropout=0.1)
+    ((cut, _),), air = cut_take(take, max_dropout=0.1)
     assert len(cut.t) == len(take.t) and air.ground == [] and air.warnings == []
+    assert cut.name == take.name and cut.stretch == {"t_s": [take.t[0], take.t[-1]],
+                                                     "part": 1, "of": 1}
+
+
+def _two_stretches():
+    """The flight lost from t = 15 to 23 s: airborne about 8.5-15 s and 23-31.5 s."""
+    pos, tracked = _profile()
+    tracked = tracked & ~((T >= 15.0) & (T < 23.0))
+    pos[~tracked] = np.nan
+    return pos, tracked
+
+
+def test_each_stretch_long_enough_becomes_a_flight_of_its_own():
+    pos, tracked = _two_stretches()
+    air = airborne(T, pos, tracked, max_dropout=0.1, path="take.csv", name="take")
+    (second,) = air.more  # the earlier, shorter stretch: take_2
+    first = air.keep  # the longest, after the loss, keeps the name
+    assert T[first][0] == pytest.approx(23.0) and T[first][-1] > 31.0
+    assert T[second][0] < 9.0 and T[second][-1] == pytest.approx(14.99)
+    assert T[second][-1] - T[second][0] >= MIN_AIRBORNE and air.others == []
+    (note,) = [w for w in air.warnings if "gives 2 flights" in w]
+    assert "(take.csv)" in note and "to 14.99 s (take_2.csv)" in note
+    assert "lost for longer than the 0.1 s bridged (t = 15 to 22.99 s)" in note
+    # bridged: one flight again
+    assert airborne(T, pos, tracked, max_dropout=9.0).more == []
+
+
+def test_cut_take_names_the_flights_and_their_stretches():
+    pos, tracked = _two_stretches()
+    quat = np.tile([1.0, 0.0, 0.0, 0.0], (len(T), 1))
+    take = RawTake("lon_0", "lon_0.csv", "fwid raw CSV", "NED", T, pos, quat, tracked, None,
+                   None, [[15.0, 22.99]], ["a warning of the take"])
+    (a, fa), (b, fb) = cut_take(take, np.full(len(T), 12.0), max_dropout=0.1)[0]
+    assert (a.name, b.name) == ("lon_0", "lon_0_2")
+    assert a.stretch["part"] == 2 and b.stretch["part"] == 1 and a.stretch["of"] == 2
+    assert a.stretch["t_s"][0] == pytest.approx(23.0)
+    assert b.stretch["t_s"][1] == pytest.approx(14.99)
+    assert a.warnings[0] == b.warnings[0] == "a warning of the take"
+    assert len(fa) == len(a.t) and len(fb) == len(b.t) and a.dropouts == b.dropouts == []
+    assert any("gives 2 flights" in w for w in a.warnings + b.warnings)
