@@ -38,10 +38,9 @@ import numpy as np
 
 from .._errors import InputError
 from ..models._greybox import GreyBoxModel
-from ..simulation._checks import check_experiment
 from ..simulation._experiment import Experiment
 from ._colour import colour_at_bandwidth
-from ._problem import FitResult, check_excitation, free_layout
+from ._problem import FitResult, free_layout, prepare
 from ._regression import derivative, stacked
 from ._uncertainty import (coloured_residual_middle, correlation, correlation_length,
                            covariance, lag1_autocorrelation)
@@ -146,7 +145,7 @@ def _regress(fn, params, layout, exps, targets, extra: int = 0, iters: int = 5):
     **Returns:** `(values, (v, Sw, W, names))`: the estimates by name of the whole vector;
     per flight the residuals and the whitened regressors (the intercepts' columns last), the
     equation weights, and the names of the regressors' first columns."""
-    names = sorted({n for lay in layout for n in lay}, key=[n for lay in layout for n in lay].index)
+    names = list(dict.fromkeys(n for lay in layout for n in lay))
     col = {n: i for i, n in enumerate(names)}
     values = {n: float(np.asarray(params[n.split("@")[0]])) for n in names}
     p = len(names)
@@ -213,11 +212,7 @@ def fit_equation_error(
     """
     t0 = time.perf_counter()
     exps, names = list(exps), list(names)
-    for e, n in zip(exps, names):
-        if e.t.dtype != jnp.float64:
-            raise TypeError("fwid.fit needs float64 arrays: enable jax_enable_x64 (import fwid)")
-        check_experiment(model, e, n)
-    check_excitation(model, exps, names)
+    prepare(model, exps, names, "model", 0)  # the checks every method makes (no start here)
     idx = _state_equations(model)
     many = len(exps) > 1 and bool(model.local) and local_per_flight is not False
     n_local = len(exps) if many else 0

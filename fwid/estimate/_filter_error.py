@@ -55,10 +55,10 @@ from .._advice import advise
 from .._errors import FitDivergedError
 from ..models._greybox import GreyBoxModel
 from ..simulation._experiment import Experiment, stack_experiments
+from ._equation_error import equation_error_start, measured_state_index
 from ._gauss_newton import NoiseModel, noise_covariance, solve_relaxed
 from ._noise import check_noise
 from ._problem import FitResult, flight_params, free_layout, merge_batch, prepare
-from ._equation_error import equation_error_start, measured_state_index
 from ._riccati import steady_state_gain
 from ._steps import rk4_step
 from ._uncertainty import correlation, covariance_held, lag1_autocorrelation
@@ -302,24 +302,22 @@ def fit_filter_error(
     run = dict(model=model, start_model=start_model, theta=theta, Rk=Rk, batch=batch, p=p,
                n_local=n_local, names=names, diagonal=diagonal, max_outer=max_outer,
                outer_rtol=outer_rtol, steps_per_pass=steps_per_pass, rtol=rtol,
-               cost_rtol=cost_rtol, max_steps=max_steps,
-               start=jnp.concatenate([theta0, jnp.asarray(f0)]))
-    if gain != "auto":
-        res = _relax(gain=gain, **run)
-    else:  # the book's gain; where its relaxation does not settle, the bounded one
+               cost_rtol=cost_rtol, max_steps=max_steps)
+    # with "auto", the book's gain; where its relaxation does not settle, the bounded one,
+    # kept if it converges (or if the book's raised)
+    gains = ("book", "bounded") if gain == "auto" else (gain,)
+    res = None
+    for g in gains:
         try:
-            res = _relax(gain="book", **run)
+            tried = _relax(gain=g, **run)
         except FitDivergedError:
-            res = None
-        if res is None or not bool(res.converged):
-            try:
-                bounded = _relax(gain="bounded", **run)
-            except FitDivergedError:
-                if res is None:
-                    raise
-                bounded = None
-            if bounded is not None and (res is None or bool(bounded.converged)):
-                res = bounded
+            if res is None and g == gains[-1]:
+                raise
+            continue
+        if res is None or bool(tried.converged):
+            res = tried
+        if bool(res.converged):
+            break
     issue(res.warnings, stacklevel=4)
     if progress:
         print(f"fwid: filter error {'converged' if bool(res.converged) else 'NOT converged'} "
@@ -330,9 +328,10 @@ def fit_filter_error(
 
 
 def _relax(*, model, start_model, theta, Rk, batch, p, n_local, names, diagonal, max_outer,
-           outer_rtol, steps_per_pass, rtol, cost_rtol, max_steps, start, gain):
+           outer_rtol, steps_per_pass, rtol, cost_rtol, max_steps, gain):
     """The book's relaxation (Sec. 5.6) from `theta` (parameters, then F) and the gain's
     `Rk`, with the gain `gain`: the [`FilterErrorResult`][] with its warnings."""
+    start = theta
     steps, last, change, moved = 0, None, float("nan"), 0
     rise_max = 0.01 * float(jnp.sum(batch.mask)) * batch.z.shape[-1]
     halvings, alt = 0, None  # F-compensation halvings; (theta, Rk) before the compensation
@@ -413,9 +412,10 @@ def _relax(*, model, start_model, theta, Rk, batch, p, n_local, names, diagonal,
     if unbounded:
         found.append(f"{', '.join(names)}: the {model.name} filter-error process noise on "
                      f"{', '.join(unbounded)} grew without bound (the values are in "
-                     "report.json): the filter trusts those measurements fully, so the estimates are those "
-                     "of one-sample-ahead prediction and the measurement noise is below what "
-                     "these flights resolve; their F have no standard deviation")
+                     "report.json): the filter trusts those measurements fully, so the "
+                     "estimates are those of one-sample-ahead prediction and the measurement "
+                     "noise is below what these flights resolve; their F have no standard "
+                     "deviation")
     if not res.white:
         bad = [k for k, w in res.whiteness.items() if not w["white"]]
         found.append(f"{', '.join(names)}: the {model.name} filter-error innovations are not "
