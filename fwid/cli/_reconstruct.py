@@ -17,21 +17,24 @@ def reconstruct(args) -> int:
         raise InputError(f"{out}: exists and is not a folder; give --out a folder")
     import fwid
     from fwid.reconstruction import raw_files
+    from fwid.reconstruction._read import distinct_names
     from fwid.reconstruction._workers import FIGURES, SCIPY, run_all, start
 
+    rmap = None
     if args.recording_map is not None:
         from fwid.reconstruction import read_map
 
-        read_map(args.recording_map)  # a bad map: one line before any work
+        rmap = read_map(args.recording_map)  # a bad map: one line before any work
     say = None if args.quiet else (lambda msg: print(f"fwid: {msg}", file=sys.stderr))
     # worker processes for the per-take work (reading, clocks, writing, figures)
-    files = raw_files(args.raw)
+    files = raw_files(args.raw, rmap)
+    distinct_names(files)
     pool = start(len(files), preload=SCIPY + (FIGURES if args.figures else ()))
     try:
         result = fwid.reconstruct(args.raw, body=args.body, frame=args.frame,
                                   onboard=args.onboard, clock_offset=args.clock_offset,
                                   max_dropout=args.max_dropout, min_overlap=args.min_overlap,
-                                  progress=say, pool=pool, recording_map=args.recording_map,
+                                  progress=say, pool=pool, recording_map=rmap,
                                   strict_frame=args.strict_frame,
                                   keep_ground=args.keep_ground)
         written = fwid.write_reconstruction(result, out, pool=pool) if result.flights else []

@@ -70,10 +70,14 @@ class Airborne(NamedTuple):
     more: list[slice] = []
 
 
-def stretch_name(name: str, k: int) -> str:
+def stretch_name(name: str, k: int, taken=frozenset()) -> str:
     """The name of a take's `k`-th flight (0: the longest stretch, the take's own name;
-    1, 2, ...: the others in time order, `NAME_2`, `NAME_3`, ...)."""
-    return name if k == 0 else f"{name}_{k + 1}"
+    1, 2, ...: the others in time order, `NAME_2`, `NAME_3`, ...; `NAME_stretch2`, ...
+    where another take of the run is named `NAME_2`, in `taken`, so no flight overwrites
+    another)."""
+    if k == 0:
+        return name
+    return f"{name}_{k + 1}" if f"{name}_{k + 1}" not in taken else f"{name}_stretch{k + 1}"
 
 
 def runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -141,7 +145,7 @@ def _times(spans) -> str:
 def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
              tracked: Bool[np.ndarray, " n"], f: Float[np.ndarray, " n"] | None = None, *,
              max_dropout: float, keep_ground: bool = False, path: str = "",
-             name: str = "") -> Airborne:
+             name: str = "", taken=frozenset()) -> Airborne:
     """The airborne stretch of a take to keep (module docstring).
 
     **Arguments:**
@@ -150,7 +154,8 @@ def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
     - `max_dropout`: the longest tracking loss (s) bridged; the take is split at longer ones;
     - `keep_ground`: keep the rests on the ground too (the wings at rest are still cut: a
       flight's `f` must be positive), and say where they are;
-    - `path`: the take, for messages; `name`: its name, for the flights' names in them.
+    - `path`: the take, for messages; `name`: its name, for the flights' names in them;
+      `taken`: the names of the run's other takes (`stretch_name`).
 
     **Returns:** an `Airborne`. Raises a `FlightDataError` when the take is cut and no
     stretch of `MIN_AIRBORNE` is left.
@@ -214,7 +219,7 @@ def airborne(t: Float[np.ndarray, " n"], pos: Float[np.ndarray, "n 3"],
     if more:
         name = name or "take"
         flights = ", ".join(f"t = {t[s.start]:.6g} to {t[s.stop - 1]:.6g} s "
-                            f"({stretch_name(name, j)}.csv)"
+                            f"({stretch_name(name, j, taken)}.csv)"
                             for j, s in enumerate([slice(a, b)] + more))
         notes.append(f"the take gives {len(more) + 1} flights, one per {kind}stretch long "
                      f"enough to identify (the longest keeps the take's name): "
@@ -277,18 +282,20 @@ def _cut(take: RawTake, f, s: slice, part: int, parts: int, name: str, warnings)
     return take, (None if f is None else f[s])
 
 
-def cut_take(take: RawTake, f=None, *, max_dropout: float, keep_ground: bool = False):
+def cut_take(take: RawTake, f=None, *, max_dropout: float, keep_ground: bool = False,
+             taken=frozenset()):
     """`(flights, airborne)`: the take (and its flapping frequency `f` on its samples, when
     given) cut to each airborne stretch long enough to identify (`airborne`), as a list of
     `(take, f)`, the longest first (named as the take), then the others in time order
     (`NAME_2`, `NAME_3`, ...); each take's warnings are extended by the cut's, and its
     `stretch` says which part of the take it is (`part` of `of`, in time order).
     The wing beat is the take's own logged `f` (the fwid raw CSV, a map's take); a Motive
-    take's log runs on a clock not yet aligned, so its pose alone tells."""
+    take's log runs on a clock not yet aligned, so its pose alone tells. `taken`: the names of
+    the run's other takes, which no stretch's name repeats (`stretch_name`)."""
     logged = take.controls.get("f") if take.controls is not None else None
     air = airborne(take.t, take.pos, take.tracked, logged, max_dropout=max_dropout,
-                   keep_ground=keep_ground, path=take.path, name=take.name)
+                   keep_ground=keep_ground, path=take.path, name=take.name, taken=taken)
     order = sorted([air.keep] + air.more, key=lambda s: s.start)
     parts = [air.keep] + air.more
-    return [_cut(take, f, s, order.index(s) + 1, len(parts), stretch_name(take.name, k),
+    return [_cut(take, f, s, order.index(s) + 1, len(parts), stretch_name(take.name, k, taken),
                  air.warnings) for k, s in enumerate(parts)], air

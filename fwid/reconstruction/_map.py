@@ -8,6 +8,7 @@ column = "timeTick"         # a column, unit = "s" | "ms" | "us"
 unit = "ms"                 # (or frame_column = "Frame" and rate = 120.0, Hz)
 
 [tracking]                  # the pose (absent: the take is a Motive export)
+# file = "{name}_pose.mat"  # the pose's own file beside the recording (default: the recording)
 position = ["otX0", "otY0", "otZ0"]
 position_unit = "m"         # m | mm
 frame = "z-up"              # ned | y-up | z-up, world and body axes alike
@@ -65,8 +66,8 @@ DEFAULT_LOG = "{name}.onboard.csv"
 
 _KEYS = {
     "time": {"column", "unit", "frame_column", "rate"},
-    "tracking": {"position", "position_unit", "frame", "attitude", "attitude_unit", "euler",
-                 "quaternion", "attitude_form"},
+    "tracking": {"file", "position", "position_unit", "frame", "attitude", "attitude_unit",
+                 "euler", "quaternion", "attitude_form"},
     "onboard": {"file", "acc", "acc_unit", "gyro", "gyro_unit", "axes", "time", "time_unit"},
     "inputs": set(CONTROLS),
 }
@@ -107,13 +108,36 @@ class RecordingMap(NamedTuple):
     inputs: dict[str, Control]
     #: euler | quaternion | matrix (nine columns, row-major, body to lab)
     attitude_form: str = "euler"
+    #: `[tracking] file`: the pose's own file beside the recording ("{name}" the recording's
+    #: name); None: the recording itself
+    tracking_file: str | None = None
 
     @property
     def log_is_take(self) -> bool:
-        """Whether the autopilot's columns are in the take's own file (`[onboard] file` is
-        `"{name}"` with a take's suffix, `.gz` allowed)."""
+        """Whether the autopilot's columns are in the file that holds the pose (`[onboard]
+        file` is `[tracking] file`, or, without one, `"{name}"` with a take's suffix, `.gz`
+        allowed)."""
+        if self.tracking_file is not None:
+            return self.log_file == self.tracking_file
         rest = self.log_file.removeprefix("{name}").removesuffix(".gz")
         return self.log_file.startswith("{name}") and rest in TAKE_SUFFIXES
+
+    def tracking_path(self, take) -> Path:
+        """The file that holds the pose of the recording at `take` (a path): `[tracking]
+        file` beside it, or the recording itself."""
+        from ._raw import take_name
+
+        take = Path(take)
+        if self.tracking_file is None:
+            return take
+        return take.with_name(self.tracking_file.format(name=take_name(take)))
+
+    def side_files(self, take) -> set[Path]:
+        """The files of the recording at `take` other than itself: its pose's file and its
+        autopilot's log (a folder's takes are its files that are no other take's)."""
+        take = Path(take)
+        files = {self.tracking_path(take)} | (set() if self.log_is_take else {self.log_path(take)})
+        return files - {take}
 
     def named(self, take: bool = True) -> list[tuple[str, str]]:
         """`(key, column)` of every column the map reads from the take (`take`: the pose,
@@ -251,6 +275,13 @@ def read_map(path) -> RecordingMap:
     if not isinstance(log_file, str) or "{name}" not in log_file:
         raise _fail(path, "[onboard] file", f"{log_file!r} must name the log with {{name}}, "
                     "the take's name (\"{name}.onboard.csv\", or \"{name}.csv\": the take itself)")
+    tracking_file = tr.get("file")
+    if tracking_file is not None and (
+            not isinstance(tracking_file, str) or "{name}" not in tracking_file
+            or not tracking_file.removesuffix(".gz").endswith(TAKE_SUFFIXES)):
+        raise _fail(path, "[tracking] file", f"{tracking_file!r} must name the pose's file with "
+                    f"{{name}}, the recording's name, and one of {', '.join(TAKE_SUFFIXES)} "
+                    "(\"{name}_pose.mat\"); leave it out when the recording holds the pose")
     return RecordingMap(
         str(path), time_column, TIME_UNITS[_choice(path, "time", tm, "unit", TIME_UNITS, "s")],
         frame_column, rate, position,
@@ -263,4 +294,5 @@ def read_map(path) -> RecordingMap:
         ACC_UNITS[_choice(path, "onboard", ob, "acc_unit", ACC_UNITS, "m/s2")],
         _columns(path, "onboard", ob, "gyro", (3,)),
         RATE_UNITS[_choice(path, "onboard", ob, "gyro_unit", RATE_UNITS, "rad/s")],
-        _choice(path, "onboard", ob, "axes", SENSOR_AXES, "frd"), inputs, form or "euler")
+        _choice(path, "onboard", ob, "axes", SENSOR_AXES, "frd"), inputs, form or "euler",
+        tracking_file)

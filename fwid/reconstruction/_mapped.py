@@ -218,13 +218,22 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     north-east-down (module docstring).
 
     **Arguments:**
-    - `path`: the take (a CSV file with one header row, or `.csv.gz`);
+    - `path`: the take (a CSV file with one header row, or `.csv.gz`, or an array file);
+      its pose is in the map's `[tracking] file` beside it where the map names one;
     - `m`: the recording map ([`fwid.reconstruction.read_map`][]);
     - `frame`: overrides the map's `[tracking] frame`;
     - `strict_frame`: refuse, instead of correcting, a pose convention the onboard sensors
       contradict;
     - `max_dropout`: the longest gap (s) bridged.
     """
+    take = path
+    path = str(m.tracking_path(take))
+    if path != str(take):
+        if not Path(path).is_file():
+            raise FlightDataError(f"{take}: no pose file {Path(path).name} beside it (the map's "
+                                  f"[tracking] file, {m.tracking_file!r}); put it there or fix "
+                                  f"the map {m.path}")
+        lines = None
     cols, notes = read_columns(path, m, True, lines)
     t = _time(cols, path, m, m.time_column, m.time_scale)
     _check_time_unit(t, path, m)
@@ -302,10 +311,11 @@ def read_mapped(path: str, m: RecordingMap, *, frame: str | None = None,
     gaps = dropouts(t, tracked, path, max_dropout, extra["dropped"])
     log = None
     if not m.log_is_take:
-        log = read_mapped_log(m.log_path(path), m, path)
+        log = read_mapped_log(m.log_path(take), m, take)
     source = (f"recording map {m.path} ({convention.frame}"
-              + (f", Euler {m.euler}" if m.euler else "") + ")")
-    return RawTake(take_name(path), str(path), source, convention.frame, t, pos, q, tracked,
+              + (f", Euler {m.euler}" if m.euler else "")
+              + (f", the pose from {Path(path).name}" if path != str(take) else "") + ")")
+    return RawTake(take_name(take), str(take), source, convention.frame, t, pos, q, tracked,
                    sensors if m.log_is_take else None, log, gaps, notes,
                    convention if checked else None, tracking_rate)
 

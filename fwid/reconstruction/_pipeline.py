@@ -229,11 +229,11 @@ def reconstruct(paths, *, body: str | None = None, frame: str | None = None, onb
     `ReconstructedFlight`: `columns`, `entry` of `reconstruction.json`, ...) and `failures`
     (`(path, one-line message)`).
     """
-    files = raw_files(paths)
     if not max_dropout > 0:
         raise InputError(f"max_dropout must be positive seconds, got {max_dropout!r}")
     if recording_map is not None and not isinstance(recording_map, RecordingMap):
         recording_map = read_map(recording_map)
+    files = raw_files(paths, recording_map)
     if onboard is not None and len(files) > 1:
         raise InputError(f"--onboard names the log of one take, but {len(files)} takes were given")
     own = pool is None
@@ -314,12 +314,13 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
             failures[str(f)] = str(e)
             say(f"{f.name}: failed (below)")
     # the airborne stretch of each take (the flapping frequency from the whole take)
-    cut = []
+    cut, names = [], {take.name for _, take, _, _ in ok}
     for f, take, veh, vpath in ok:
         try:
             fl, note = _flapping(take)
             take = take if note is None else take._replace(warnings=take.warnings + [note])
-            pieces, _ = cut_take(take, fl, max_dropout=max_dropout, keep_ground=keep_ground)
+            pieces, _ = cut_take(take, fl, max_dropout=max_dropout, keep_ground=keep_ground,
+                                 taken=names - {take.name})
             cut += [((f, piece, veh, vpath), fp) for piece, fp in pieces]
         except FwidError as e:
             failures[str(f)] = str(e)

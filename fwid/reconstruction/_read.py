@@ -13,33 +13,56 @@ from ._map import RecordingMap, read_map
 from ._mapped import read_mapped, read_mapped_log
 from ._motive import is_old_export, old_export_error, read_motive
 from ._qtm import is_qtm_mat, is_qtm_tsv, read_qtm_mat, read_qtm_tsv
-from ._raw import MAX_DROPOUT, RawTake, read_lines
+from ._raw import MAX_DROPOUT, RawTake, read_lines, take_name
 from ._rotations import FRAMES
 from ._vicon import is_nexus, read_nexus
 
 
 #: The files of a folder read as raw takes: CSV (fwid raw, Motive, Vicon Nexus), QTM's TSV
-#: and MATLAB exports, gzip-compressed or not.
+#: and MATLAB exports, gzip-compressed or not; through a recording map, NumPy and HDF5 too.
 RAW_PATTERNS = ("*.csv", "*.csv.gz", "*.tsv", "*.tsv.gz", "*.mat")
+MAPPED_PATTERNS = RAW_PATTERNS + ("*.npz", "*.h5", "*.hdf5")
 
 
-def raw_files(paths) -> list[Path]:
-    """The raw takes named by `paths` (files, or folders: their top-level `RAW_PATTERNS` files
-    that do not end in `.onboard.csv`; subfolders are ignored), in order."""
+def raw_files(paths, recording_map=None) -> list[Path]:
+    """The raw takes named by `paths` (files, or folders: their top-level `RAW_PATTERNS` files,
+    with a recording map `MAPPED_PATTERNS`, that are no other take's autopilot log or pose file
+    (`NAME.onboard.csv`, the map's `[onboard] file` and `[tracking] file`); subfolders are
+    ignored), in order."""
+    m = recording_map
+    if m is not None and not isinstance(m, RecordingMap):
+        m = read_map(m)
     out = []
     for p in [paths] if isinstance(paths, (str, os.PathLike)) else paths:
         p = Path(p)
         if p.is_dir():
-            found = sorted(f for pat in RAW_PATTERNS for f in p.glob(pat)
-                           if not f.name.endswith((".onboard.csv", ".onboard.csv.gz")))
+            found = sorted({f for pat in (RAW_PATTERNS if m is None else MAPPED_PATTERNS)
+                            for f in p.glob(pat)
+                            if not f.name.endswith((".onboard.csv", ".onboard.csv.gz"))})
+            if m is not None:
+                side = set().union(*(m.side_files(f) for f in found))
+                found = [f for f in found if f not in side]
             if not found:
-                raise FlightDataError(f"{p}: no raw take (*.csv) in the folder")
+                kinds = ", ".join(RAW_PATTERNS if m is None else MAPPED_PATTERNS)
+                raise FlightDataError(f"{p}: no raw take ({kinds}) in the folder")
             out += found
         elif p.is_file():
             out.append(p)
         else:
             raise FlightDataError(f"{p}: no such file or folder")
     return out
+
+
+def distinct_names(files) -> None:
+    """Refuse, before any work, takes of one name (`a.csv` and `a.mat`, or `x/a.csv` and
+    `y/a.csv`): their flights would be written to one file."""
+    names: dict[str, Path] = {}
+    for f in map(Path, files):
+        other = names.setdefault(take_name(f), f)
+        if other != f:
+            raise InputError(f"{other} and {f}: two takes named {take_name(f)!r} would write one "
+                             f"flight ({take_name(f)}.csv); reconstruct them into separate --out "
+                             "folders, or rename one")
 
 
 def read_raw(path, *, body: str | None = None, frame: str | None = None,
@@ -81,6 +104,9 @@ def read_raw(path, *, body: str | None = None, frame: str | None = None,
     m = recording_map
     if m is not None and not isinstance(m, RecordingMap):
         m = read_map(m)
+    if m is not None and m.tracking_file is not None:  # the pose in a file of its own
+        return read_mapped(str(path), m, frame=frame, strict_frame=strict_frame,
+                           max_dropout=max_dropout)
     if m is None and is_qtm_mat(path):
         return read_qtm_mat(str(path), body=body, frame=frame or "z-up", onboard=onboard,
                             max_dropout=max_dropout)

@@ -66,7 +66,8 @@ def write_flight(out_dir, flight) -> Path:
 def write_reconstruction(result, out_dir, *, pool=None) -> list[Path]:
     """Write the flights, `vehicle.json` and `reconstruction.json` of a reconstruction.
 
-    Each file is written atomically into `out_dir`; the flights' `vehicle.json` must agree;
+    Each file is written atomically into `out_dir`; the flights' `vehicle.json` must agree,
+    and no two flights of different takes may share a name (refused before anything is written);
     entries already in an existing `reconstruction.json` for other flights are kept.
 
     **Arguments:**
@@ -85,6 +86,11 @@ def write_reconstruction(result, out_dir, *, pool=None) -> list[Path]:
     if len(vehicles) > 1:
         raise InputError(f"the takes have different vehicle.json files; reconstruct them into "
                          f"separate --out folders ({', '.join(fl.vehicle_path for fl in result.flights)})")
+    names = [fl.name for fl in result.flights]  # a take's own flights never share one
+    for name in {n for n in names if names.count(n) > 1}:
+        raise InputError(f"two takes give the flight {name} "
+                         f"({'; '.join(fl.entry['source'] for fl in result.flights if fl.name == name)})"
+                         "; write them into separate folders, or rename one take")
     out.mkdir(parents=True, exist_ok=True)
     written += run_all(write_flight, [((out, fl), {}) for fl in result.flights], pool)
     if result.flights:

@@ -148,3 +148,7 @@ def test_cut_take_names_the_flights_and_their_stretches():
     assert a.warnings[0] == b.warnings[0] == "a warning of the take"
     assert len(fa) == len(a.t) and len(fb) == len(b.t) and a.dropouts == b.dropouts == []
     assert any("gives 2 flights" in w for w in a.warnings + b.warnings)
+    # another take of the run is named lon_0_2: the stretch takes a name of its own
+    (a, _), (b, _) = cut_take(take, None, max_dropout=0.1, taken={"lon_0_2"})[0]
+    assert (a.name, b.name) == ("lon_0", "lon_0_stretch2")
+    assert any("(lon_0_stretch2.csv)" in w for w in b.warnings)

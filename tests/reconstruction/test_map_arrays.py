@@ -220,3 +220,56 @@ def test_tracking_slower_than_its_log(tmp_path, motion):
     truth = motion.euler(col["t"])
     np.testing.assert_allclose(col["theta"][inner], truth[inner, 1], atol=0.03)
     np.testing.assert_allclose(col["de"], 0.1 * np.sin(2 * np.pi * 0.5 * col["t"]), atol=2e-3)
+
+
+def test_pose_in_a_file_of_its_own(tmp_path, motion, capsys):
+    """`[tracking] file`: the pose in `NAME_mocap.npz` beside the autopilot's log `NAME.csv`
+    (on its own clock) reconstructs as the one file holding both; in a folder the pose's
+    file is no take of its own; a missing pose file is one line."""
+    c = lab_columns(motion, T, jitter=False)
+    pose = ("tick", "X", "Y", "Z", "roll", "pitch", "yaw")
+    log = {"t": c["tick"] / 1e3, "servo": c["servo"], "left": c["left"], "right": c["right"]}
+    text = MAP.replace('file = "{name}.csv"\nacc = ["ax", "ay", "az"]\nacc_unit = "g"\n'
+                       'axes = "flu"', 'time = "t"')
+    same = tmp_path / "same"  # the pose in the take, the log in NAME.onboard.csv
+    same.mkdir()
+    write_vehicle(same)
+    write_columns(same / "a.csv", {k: c[k] for k in pose})
+    write_columns(same / "a.onboard.csv", log)
+    folder = tmp_path / "lab"  # the log as the recording, the pose in a file of its own
+    folder.mkdir()
+    write_vehicle(folder)
+    np.savez(folder / "a_mocap.npz", **{k: np.asarray(c[k], float) for k in pose})
+    write_columns(folder / "a.csv", log)
+    maps = _maps(tmp_path, same=text, lab=text.replace(
+        "[tracking]\n", '[tracking]\nfile = "{name}_mocap.npz"\n').replace(
+        "[onboard]\n", '[onboard]\nfile = "{name}.csv"\n'))
+    m = maps["lab"]
+    ref = fwid.reconstruct(same, recording_map=maps["same"])
+    assert fwid.reconstruction.raw_files(folder, m) == [folder / "a.csv"]
+    got = fwid.reconstruct(folder, recording_map=m)
+    assert not ref.failures and not got.failures, (ref.failures, got.failures)
+    (a,), (b,) = ref.flights, got.flights
+    assert b.name == "a" and "a_mocap.npz" in b.entry["source"]
+    for k in ("u", "w", "q", "theta", "de"):
+        np.testing.assert_allclose(b.columns[k], a.columns[k], atol=1e-5, err_msg=k)
+    (folder / "a_mocap.npz").unlink()
+    assert main(["reconstruct", str(folder / "a.csv"), "--map", str(m),
+                 "--out", str(tmp_path / "out")]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if "error" in ln]
+    assert len(err) == 1 and "a_mocap.npz" in err[0] and "[tracking] file" in err[0], err
+
+
+def test_two_takes_of_one_name_are_refused(tmp_path, motion, capsys):
+    """`a.csv` and `a.npz` in one folder would write one flight `a.csv`: refused on the command
+    line before any work, naming both; nothing is written."""
+    c = lab_columns(motion, T, jitter=False)
+    write_columns(tmp_path / "a.csv", c)
+    np.savez(tmp_path / "a.npz", **{k: np.asarray(v, float) for k, v in c.items()})
+    write_vehicle(tmp_path)
+    m = _maps(tmp_path, m=MAP)["m"]
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(tmp_path), "--map", str(m), "--out", str(out)]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if "error" in ln]
+    assert len(err) == 1 and "two takes named 'a'" in err[0] and "a.npz" in err[0], err
+    assert not out.exists()
