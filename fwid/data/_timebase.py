@@ -2,10 +2,11 @@
 (an autopilot's log stamps its samples by a millisecond tick, a logger's clock runs between
 its samples) are resampled onto the uniform grid, linearly between neighbours.
 
-The limits: a step that departs from the median step by at most `JITTER` of it is jitter;
-beyond it, a step close to a whole number of steps (within `JITTER`) holds missing samples,
-which a raw recording bridges as dropouts (`uniform_time`) and a flight file may not
-hold (`uniform_flight`); a step of another length, or one at or below zero, is an error.
+The limits: in a flight file (`uniform_flight`), a step that departs from the median step by
+at most `JITTER` of it is jitter, and any other step an error. A raw recording
+(`uniform_time`) comes from a logger whose loop may run unevenly: every grid time between
+samples less than `GAP` median steps apart is interpolated; one in a longer step falls in
+missing samples, bridged as dropouts. A step at or below zero is an error in both.
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ from .._words import count
 #: A step within this fraction of the median step is jitter (resampled), and a step within
 #: it of a whole number of median steps holds missing samples.
 JITTER = 0.25
+#: A raw recording's step longer than this many median steps holds missing samples (the
+#: grid times inside it are dropouts); shorter steps are interpolated across.
+GAP = 1.5
 #: A raw recording whose steps are within this fraction of the median one is uniform
 #: already (no resampling).
 UNIFORM = 0.01
@@ -66,8 +70,8 @@ def uniform_time(t: np.ndarray, path: str, first_line: int, what: str = "time"):
     `weights` `(len(grid), len(t))` as a sparse pair `(left, frac)` of the sample before
     each grid time and the fraction of the way to the next one (`frac` NaN where the grid
     time falls in missing samples), or None when `t` is uniform already; one warning per
-    change made. A time stamp that is empty, not increasing, or a step that is neither
-    jitter nor missing samples is a `FlightDataError` naming the line.
+    change made. A time stamp that is empty or not increasing is a `FlightDataError` naming
+    the line.
     """
     if len(t) < 3:
         raise FlightDataError(f"{path}: only {len(t)} samples; a recording needs at least 3")
@@ -84,26 +88,18 @@ def uniform_time(t: np.ndarray, path: str, first_line: int, what: str = "time"):
             f"{t[i + 1]:.6g}); sort the rows by time and drop repeated samples")
     if np.all(np.abs(d - dt) <= UNIFORM * dt):
         return t, None, []
-    k = np.round(d / dt)
-    off = np.abs(d / dt - k)
-    bad = np.flatnonzero((k < 1) | (off > JITTER))
-    if bad.size:
-        i = int(bad[0])
-        raise FlightDataError(
-            f"{path}, line {first_line + i + 1}: a step of {d[i]:.6g} s at {what} {t[i + 1]:.6g} "
-            f"is neither the take's step {dt:.6g} s (within {JITTER:.0%}) nor a whole number of "
-            "them (missing samples); export the samples at a uniform rate")
     grid, left, frac = _grid(t, dt)
-    frac = np.where(k[left] > 1, np.where(frac < 1e-9, 0.0, np.where(frac > 1 - 1e-9, 1.0,
-                                                                        np.nan)), frac)
+    long = d > GAP * dt  # missing samples: only the grid times on a sample are kept
+    frac = np.where(long[left], np.where(frac < 1e-9, 0.0, np.where(frac > 1 - 1e-9, 1.0,
+                                                                    np.nan)), frac)
     notes = []
-    jitter = float(np.max(np.abs(d[k == 1] / dt - 1))) if np.any(k == 1) else 0.0
+    jitter = float(np.max(np.abs(d[~long] / dt - 1))) if np.any(~long) else 0.0
     if jitter > UNIFORM:
         notes.append(_jitter_note(jitter, dt))
-    missing = int(np.sum(k[k > 1] - 1))
+    missing = int(np.sum(np.isnan(frac)))
     if missing:
-        notes.append(f"{count(missing, 'sample')} missing from the time "
-                     "stamps; bridged as dropouts")
+        notes.append(f"{count(missing, 'sample')} missing from the time stamps (steps over "
+                     f"{GAP:g} times the typical {dt * 1e3:.4g} ms); bridged as dropouts")
     return grid, (left, frac), notes
 
 

@@ -82,3 +82,22 @@ def test_reconstruction_uses_the_same_time_base():
 
     assert _mapped.uniform_time is _timebase.uniform_time
     assert _mapped.onto_grid is _timebase.onto_grid
+
+
+def test_an_uneven_logger_is_resampled_and_its_long_steps_are_dropouts():
+    """A raw recording from a logger whose loop runs unevenly (steps 70-130 % of the typical
+    one) is resampled, not refused; a step over `GAP` typical ones holds missing samples."""
+    from fwid.data._timebase import GAP, onto_grid, uniform_time
+
+    rng = np.random.default_rng(1)
+    t = np.cumsum(rng.uniform(0.7, 1.3, 400) * 0.01)
+    t = np.concatenate([t[:200], t[200:] + 0.05])  # 50 ms lost after row 200
+    grid, how, notes = uniform_time(t, "log.mat", 1)
+    x = onto_grid(np.sin(t), how)
+    inside = (grid > t[199] + 1e-9) & (grid < t[200] - 1e-9)
+    assert inside.sum() >= 4 and np.all(np.isnan(x[inside]))
+    assert np.max(np.abs(x[~inside] - np.sin(grid[~inside]))) < 1e-3
+    assert any("jitter by up to" in n for n in notes)
+    assert any(f"over {GAP:g} times" in n and "dropouts" in n for n in notes)
+    with pytest.raises(FlightDataError, match="does not increase"):
+        uniform_time(np.array([0.0, 0.01, 0.01, 0.02]), "log.mat", 1)
