@@ -16,7 +16,10 @@ column**: `Rot[0..2]` is its first column (r11, r21, r31), `Rot[3..5]` the secon
 the third, so that MATLAB's `reshape(Rotations(1,:,k), 3, 3)` (column-major) gives the matrix,
 as QTM's MATLAB export documentation uses it. The matrix maps body (local) axes to the
 lab's: its columns are the body's axes in lab coordinates. A reader with the order swapped
-would read every attitude inverted; tests write QTM's layout from a known attitude. QTM's
+would read every attitude inverted; tests write QTM's layout from a known attitude. The
+export's own Euler angles check the order (`_order`): where they follow QTM's standard
+definition (R = Rx(roll) Ry(pitch) Rz(yaw)) and agree with the matrix read row by row but
+not column by column, the matrix is read row by row, with a warning. QTM's
 lab frame is z-up by default (`--frame z-up`), body axes alike (x forward, z up).
 """
 
@@ -53,10 +56,41 @@ def is_qtm_mat(path) -> bool:
         return False
 
 
-def _matrices(rot, tracked):
-    """Body -> lab matrices of QTM's `Rot[0..8]` (column by column), identity where lost."""
-    rot = np.where(tracked[:, None], rot, np.eye(3).ravel())
-    return rot.reshape(-1, 3, 3).transpose(0, 2, 1)
+#: Median angle (deg) between the export's Euler angles and its matrix within which the two
+#: agree (the export rounds both; a wrong order or another Euler definition is tens of deg).
+AGREE_DEG = 1.0
+
+
+def _matrices(rot, tracked, by_rows: bool = False):
+    """Body -> lab matrices of QTM's `Rot[0..8]` (column by column, or `by_rows`), identity
+    where lost."""
+    rot = np.where(tracked[:, None], rot, np.eye(3).ravel()).reshape(-1, 3, 3)
+    return rot if by_rows else rot.transpose(0, 2, 1)
+
+
+def _order(rot, rpy, tracked) -> tuple[bool, str | None]:
+    """Whether `Rot[0..8]` is to be read row by row, and the warning when it is: the
+    export's Euler angles `rpy` (deg) in QTM's standard definition agree with the matrix
+    read row by row and not with it read column by column (QTM's documented order). Where
+    the angles agree with neither (a project's own Euler definition), the documented order."""
+    from scipy.spatial.transform import Rotation
+
+    ok = tracked & np.all(np.isfinite(rpy), 1)
+    if ok.sum() < 3:
+        return False, None
+    E = Rotation.from_euler("XYZ", rpy[ok], degrees=True)
+
+    def off(by_rows):
+        M = _matrices(rot[ok], np.ones(int(ok.sum()), bool), by_rows)
+        U, _, Vt = np.linalg.svd(M)
+        return float(np.median(np.rad2deg((E.inv() * Rotation.from_matrix(U @ Vt)).magnitude())))
+
+    cols, rows = off(False), off(True)
+    if cols > AGREE_DEG and rows <= AGREE_DEG:
+        return True, (f"the rotation matrix Rot[0..8] is read row by row: the export's Roll, "
+                      f"Pitch, Yaw agree with it so (median {rows:.2g} deg apart) and not "
+                      f"column by column, QTM's documented order ({cols:.3g} deg apart)")
+    return False, None
 
 
 def read_qtm_tsv(path: str, lines: list[str], body: str | None = None, frame: str = "z-up",
@@ -96,7 +130,7 @@ def read_qtm_tsv(path: str, lines: list[str], body: str | None = None, frame: st
     full = np.full((len(ft.t), 16), np.nan)
     full[ft.rows] = data[:, j:j + 16]
     return _take(path, ft.t, full[:, :3], full[:, 7:], body, frame, ft.warnings, onboard,
-                 max_dropout, "QTM 6DOF TSV export")
+                 max_dropout, "QTM 6DOF TSV export", full[:, 3:6])
 
 
 def read_qtm_mat(path: str, body: str | None = None, frame: str = "z-up", onboard=None,
@@ -122,14 +156,19 @@ def read_qtm_mat(path: str, body: str | None = None, frame: str = "z-up", onboar
     n = int(m.Frames)
     pos = np.asarray(rb.Positions, float).reshape(len(names), 3, n)[i].T
     rot = np.asarray(rb.Rotations, float).reshape(len(names), 9, n)[i].T
+    rpy = (np.asarray(rb.RPYs, float).reshape(len(names), 3, n)[i].T
+           if hasattr(rb, "RPYs") else np.full((n, 3), np.nan))
     start = int(getattr(m, "StartFrame", 1))
     t = (start - 1 + np.arange(n)) / float(m.FrameRate)
-    return _take(path, t, pos, rot, body, frame, [], onboard, max_dropout, "QTM MATLAB export")
+    return _take(path, t, pos, rot, body, frame, [], onboard, max_dropout, "QTM MATLAB export",
+                 rpy)
 
 
-def _take(path, t, pos_mm, rot, body, frame, warnings, onboard, max_dropout, form):
+def _take(path, t, pos_mm, rot, body, frame, warnings, onboard, max_dropout, form, rpy):
     tracked = np.all(np.isfinite(pos_mm), axis=1) & np.all(np.isfinite(rot), axis=1)
-    pos, R = to_ned(pos_mm * 1e-3, _matrices(rot, tracked), frame)
+    by_rows, note = _order(rot, rpy, tracked)
+    warnings = list(warnings) + ([note] if note else [])
+    pos, R = to_ned(pos_mm * 1e-3, _matrices(rot, tracked, by_rows), frame)
     return pose_take(path, t, pos, R, tracked, frame, warnings, onboard, max_dropout,
                      f"{form} (body {body}, {frame}, mm, rotation matrix)", f"body {body!r}")
 

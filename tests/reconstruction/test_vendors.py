@@ -150,24 +150,48 @@ def test_qtm_trimmed_tsv_starts_at_its_first_frame(tmp_path, pose, ref):
     _same(take, ref, slice(20, None))
 
 
-def test_qtm_rotation_order_matters(tmp_path, pose, ref):
-    """The matrix written row by row instead reads as another attitude."""
-    path = write_qtm_tsv(tmp_path / "take.tsv", pose)
-    take = read_raw(path, body="DelFly")
+def _rewrite_qtm(path, change):
+    """The QTM TSV at `path` with each tracked row's 16 DelFly cells passed through `change`."""
     lines = path.read_text().splitlines()
     k = next(i for i, ln in enumerate(lines) if ln.startswith("Frame\t"))
     out = lines[:k + 1]
-    j = lines[k].split("\t").index("DelFly X") + 7
+    j = lines[k].split("\t").index("DelFly X")
     for ln in lines[k + 1:]:
         c = ln.split("\t")
         if c[j]:
-            m = np.array(c[j:j + 9], float).reshape(3, 3).T.ravel()
-            c[j:j + 9] = [repr(float(v)) for v in m]
+            c[j:j + 16] = change(c[j:j + 16])
         out.append("\t".join(c))
     path.write_text("\n".join(out) + "\n")
-    swapped = read_raw(path, body="DelFly")
+    return path
+
+
+def _transposed(cells):
+    m = np.array(cells[7:16], float).reshape(3, 3).T.ravel()
+    return cells[:7] + [repr(float(v)) for v in m]
+
+
+def test_qtm_rotation_order_matters(tmp_path, pose, ref):
+    """The matrix written row by row, beside Euler angles of another definition (here: all
+    zero), reads as another attitude: the documented column order holds."""
+    path = write_qtm_tsv(tmp_path / "take.tsv", pose)
+    take = read_raw(path, body="DelFly")
+    swapped = read_raw(_rewrite_qtm(path, lambda c: _transposed(c[:3] + ["0"] * 3 + c[6:])),
+                       body="DelFly")
     ok = take.tracked
     assert np.max(1 - np.abs(np.sum(swapped.quat[ok] * ref.quat[ok], 1))) > 0.1
+    assert not any("row by row" in w for w in swapped.warnings)
+
+
+def test_qtm_row_order_told_by_the_euler_angles(tmp_path, pose, ref):
+    """The matrix written row by row beside QTM's standard Euler angles is read row by row,
+    right, with a warning naming both orders' disagreement."""
+    path = _rewrite_qtm(write_qtm_tsv(tmp_path / "take.tsv", pose), _transposed)
+    take = read_raw(path, body="DelFly")
+    _same(take, ref)
+    (note,) = [w for w in take.warnings if "row by row" in w]
+    assert "Roll, Pitch, Yaw agree" in note and "QTM's documented order" in note
+    assert not any("row by row" in w for w in read_raw(write_qtm_tsv(
+        tmp_path / "ok.tsv", pose), body="DelFly").warnings)
 
 
 def write_qtm_mat(path, pose):
