@@ -81,3 +81,12 @@ def test_each_form_reconstructs_as_its_twin(tmp_path, twins, form, twin):
         assert abs(errors[c] - twins[twin][c]) < SAME, (c, errors, twins[twin])
     # the gyro halves the pitch rate's and moment's error: the twins are told apart
     assert twins["motive"]["q"] < 0.5 * twins["fwid"]["q"]
+
+
+def test_the_guide_shows_the_map_the_simulator_writes():
+    from pathlib import Path
+
+    from fwid.synth import LAB_MAP
+
+    page = Path(__file__).resolve().parents[2] / "docs" / "guide" / "vendors" / "lab-logs.md"
+    assert f"```toml\n{LAB_MAP}```" in page.read_text()
