@@ -9,6 +9,7 @@ import os
 from pathlib import Path
 
 import nbformat
+import numpy as np
 import pytest
 from nbclient import NotebookClient
 
@@ -115,3 +116,33 @@ def test_real_flapper_notebook_runs(tmp_path):
     assert "the two splits agree on the verdict: " in text
     assert "nanx as large" not in text  # no steady flight: said in words
     assert len(images) >= 3  # the accelerometer, the two gap maps
+
+
+@pytest.mark.slow
+def test_tracking_exports_notebook_runs(tmp_path):
+    outputs, text, images = _execute("07_tracking_exports.ipynb", tmp_path)
+    assert "Segments" in text and "NO_OF_FRAMES" in text and "record_Sensor_data" in text
+    # every form read back, each within the bound measured on this flight (the worst channel,
+    # X, about 2.9 %)
+    worst = [ln for ln in text.splitlines() if ": largest cycle-averaged error " in ln]
+    assert [ln.split(":")[0] for ln in worst] == ["fwid", "motive", "vicon", "qtm", "qtm-mat",
+                                                  "matlab"]
+    for line in worst:
+        assert float(line.split("error ")[1].split(" %")[0]) < 5.0, line
+    # the four exports with a log give the motive form's numbers, the MATLAB log the fwid's
+    rows = {ln.split()[0]: ln.split()[1:] for ln in text.splitlines()
+            if ln.split()[:1] and ln.split()[0] in ("fwid", "motive", "vicon", "qtm", "qtm-mat",
+                                                    "matlab") and len(ln.split()) == 8}
+    for form in ("vicon", "qtm", "qtm-mat"):
+        assert rows[form] == rows["motive"], rows
+    assert np.allclose(np.array(rows["matlab"], float), np.array(rows["fwid"], float), atol=0.02)
+    assert len(images) >= 1  # q and theta of every form
+    if (_REAL / "vicon_nexus_test_rig.csv.gz").exists():
+        assert "Vicon Nexus CSV export (Segments test rig:arm, z-up, mm, helical)" in text
+        assert "rate 200 Hz, 39315 frames" in text
+        assert "without --body: the take holds rigid bodies Right Hand," in text
+        # the pool export's bodies flip orientation between frames: each refused in one line
+        refused = [ln for ln in text.splitlines() if ln.startswith("--body ")]
+        assert len(refused) == 3 and all("tracked frames are glitches" in r for r in refused)
+    else:
+        assert "not found in" in text

@@ -78,10 +78,13 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--drift", action="store_true", help="drifting flapping frequency")
     r = s.add_argument_group("raw recordings (the guide's 'Formats and interfaces' page, "
                              "docs/reference/formats.md; the 6-DOF nonlinear flight)")
-    r.add_argument("--raw", nargs="?", const="fwid", choices=("fwid", "motive"), default=None,
-                   help="write raw recordings instead of flights: the fwid raw CSV (NED), or a "
-                        "Motive CSV export (y-up mm, a second rigid body) with the autopilot log "
-                        "NAME.onboard.csv; the truth goes to OUT_DIR/truth/")
+    r.add_argument("--raw", nargs="?", const="fwid",
+                   choices=("fwid", "motive", "vicon", "qtm", "qtm-mat", "matlab"), default=None,
+                   help="write raw recordings instead of flights: the fwid raw CSV (NED); a "
+                        "Motive CSV export (y-up mm, a second rigid body), a Vicon Nexus CSV "
+                        "export (z-up), a QTM 6DOF TSV (qtm) or MATLAB (qtm-mat) export, each "
+                        "with the autopilot log NAME.onboard.csv; or a lab's MATLAB log (matlab) "
+                        "with its map lab.toml; the truth goes to OUT_DIR/truth/")
     r.add_argument("--rate", type=float, default=None, help="tracking frame rate [Hz] (200)")
     r.add_argument("--position-noise", type=float, default=None,
                    help="tracking position noise, 1 sigma per axis [mm] (0.4)")
@@ -90,9 +93,9 @@ def parser() -> argparse.ArgumentParser:
     r.add_argument("--dropouts", type=float, default=None,
                    help="share of frames where tracking lost the body (0.005)")
     r.add_argument("--onboard-rate", type=float, default=None,
-                   help="autopilot log rate [Hz] (512; motive form)")
+                   help="autopilot log rate [Hz] (512; the forms with a log)")
     r.add_argument("--clock-offset", type=float, default=None,
-                   help="t_tracking - t_onboard [s] (random in +-200 s; motive form)")
+                   help="t_tracking - t_onboard [s] (random in +-200 s; the forms with a log)")
 
     tp = sub.add_parser("template", help="write an example flight folder to overwrite with "
                         "your own data (columns, units, vehicle.json explained in README.txt)",

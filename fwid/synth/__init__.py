@@ -13,8 +13,9 @@ a family of forms (`form`, `FORMS`), or two at once;
 Raw recordings (the raw-recording formats): `simulate_raw` flies the same vehicle and loads
 with the full nonlinear rigid-body equations (JAX, diffrax) and records the flight as a lab
 would (a tracking take with pose noise and dropouts, an autopilot log on its own clock with a
-biased gyro); `write_raw_flights` writes such flights as fwid raw CSVs or Motive exports, with
-the truth beside them.
+biased gyro); `write_raw_flights` writes such flights as fwid raw CSVs, as the tracking vendors' exports
+(OptiTrack Motive, Vicon Nexus, Qualisys QTM TSV and MATLAB) with the autopilot's log, or as a
+lab's MATLAB log with its recording map, with the truth beside them.
 """
 
 from ._delfly import (
@@ -64,6 +65,7 @@ from ._strength import effect_noise_ratio as effect_noise_ratio
 from ._raw import ONBOARD as ONBOARD, RAW_AMPLITUDE as RAW_AMPLITUDE, TRACKING as TRACKING, simulate_raw as simulate_raw
 from ._rawfiles import (
     RAW_COLUMNS as RAW_COLUMNS,
+    MAP_NAME as MAP_NAME,
     RAW_FORMS as RAW_FORMS,
     Y_UP as Y_UP,
     ned_to_y_up as ned_to_y_up,
@@ -71,7 +73,16 @@ from ._rawfiles import (
     write_motive as write_motive,
     write_onboard as write_onboard,
     write_raw_flights as write_raw_flights,
+    write_take as write_take,
     write_truth as write_truth,
+)
+from ._labmat import LAB_MAP as LAB_MAP, write_lab_mat as write_lab_mat
+from ._vendors import (
+    Z_UP as Z_UP,
+    ned_to_z_up as ned_to_z_up,
+    write_nexus as write_nexus,
+    write_qtm_mat as write_qtm_mat,
+    write_qtm_tsv as write_qtm_tsv,
 )
 from ._sixdof import (
     SIXDOF_STATES as SIXDOF_STATES,

@@ -1,5 +1,6 @@
-"""Write raw recordings (`simulate_raw`) as files (the raw-recording formats): the fwid raw CSV, or
-an OptiTrack Motive CSV export with its autopilot log; and beside them the truth
+"""Write raw recordings (`simulate_raw`) as files (the raw-recording formats): the fwid raw CSV; an
+OptiTrack Motive CSV export, a Vicon Nexus CSV export, a QTM 6DOF TSV or MATLAB export, each
+with its autopilot log; or a lab's MATLAB log with its recording map; and beside them the truth
 (`truth/NAME.csv`, `truth/vehicle.json`, `truth/NAME.json`)."""
 
 from __future__ import annotations
@@ -12,12 +13,23 @@ from pathlib import Path
 import numpy as np
 
 from ._delfly import DELFLY
+from ._labmat import LAB_MAP, write_lab_mat
 from ._raw import RAW_AMPLITUDE, quat_mul, simulate_raw
 from ._simulate import COLUMNS
+from ._vendors import write_nexus, write_qtm_mat, write_qtm_tsv
 from ._write import INPUT_CYCLE
 
 #: Raw forms `fwid simulate --raw` writes.
-RAW_FORMS = ("fwid", "motive")
+RAW_FORMS = ("fwid", "motive", "vicon", "qtm", "qtm-mat", "matlab")
+
+#: The forms written with an autopilot log `NAME.onboard.csv` on its own clock, and the
+#: suffix of each form's take.
+WITH_LOG = ("motive", "vicon", "qtm", "qtm-mat")
+SUFFIX = {"fwid": ".csv", "motive": ".csv", "vicon": ".csv", "qtm": ".tsv", "qtm-mat": ".mat",
+          "matlab": ".mat"}
+
+#: The recording map written beside the `matlab` form's logs.
+MAP_NAME = "lab.toml"
 
 #: NED from Motive's y-up world (and body) axes: `x_ned = C X_motive` (x = X, y = Z, z = -Y).
 Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
@@ -127,10 +139,7 @@ def write_motive(path, raw: dict, body: str = "DelFly") -> Path:
 
 
 def _matrices(truth) -> np.ndarray:
-    from ._sixdof import quat_to_matrix
-
-    q = np.column_stack([truth[c] for c in ("qw", "qx", "qy", "qz")])
-    return np.asarray(quat_to_matrix(q))
+    return _quat_matrices(np.column_stack([truth[c] for c in ("qw", "qx", "qy", "qz")]))
 
 
 def write_onboard(path, raw: dict) -> Path:
@@ -155,11 +164,42 @@ def write_truth(out_dir, name: str, raw: dict, vehicle=DELFLY) -> Path:
     return path
 
 
+def write_take(path, raw: dict, form: str, seed: int = 0) -> Path:
+    """Write the take of a `simulate_raw` result in the raw form `form` (`RAW_FORMS`); the
+    vendors' exports hold the pose alone (the rigid body `DelFly` beside a still `Wand`)."""
+    take = raw["take"]
+    if form == "fwid":
+        return write_fwid_raw(path, raw, seed=seed)
+    if form == "motive":
+        return write_motive(path, raw)
+    tracked = ~raw["lost"]
+    q = np.where(tracked[:, None], take["quat"], [1.0, 0.0, 0.0, 0.0])
+    pose = (take["t"], take["position"], _quat_matrices(q), tracked)
+    if form == "vicon":
+        return write_nexus(path, *pose)
+    if form == "qtm":
+        return write_qtm_tsv(path, *pose)
+    if form == "qtm-mat":
+        return write_qtm_mat(path, *pose)
+    return write_lab_mat(path, *pose, {c: take[c] for c in ("de", "dr", "f")})
+
+
+def _quat_matrices(q) -> np.ndarray:
+    from ._sixdof import quat_to_matrix
+
+    return np.asarray(quat_to_matrix(np.asarray(q, float)))
+
+
 def write_raw_flights(out_dir, raw: str = "fwid", n_flights: int = 4, axis: str = "lon",
                       seed: int = 0, prefix: str | None = None, **kw) -> list[Path]:
     """Simulate `n_flights` 6-DOF flights (`simulate_raw`) and write them in the raw form
-    `raw` (`"fwid"` or `"motive"`) into `out_dir`: `NAME.csv` (+ `NAME.onboard.csv` for `motive`),
-    `vehicle.json`, and the truth under `truth/`.
+    `raw` (`RAW_FORMS`) into `out_dir`, with `vehicle.json` and the truth under `truth/`:
+    `"fwid"`: `NAME.csv`, the fwid raw CSV; `"motive"`, `"vicon"`: `NAME.csv`, an OptiTrack Motive
+    or a Vicon Nexus CSV export; `"qtm"`: `NAME.tsv`, `"qtm-mat"`: `NAME.mat`, a QTM 6DOF TSV or
+    MATLAB export; each export with the autopilot log `NAME.onboard.csv` on its own clock;
+    `"matlab"`: `NAME.mat`, a lab's MATLAB log of the pose and PWM outputs on one clock, read
+    through the recording map `lab.toml` written beside it (`fwid reconstruct OUT --map
+    OUT/lab.toml`).
 
     Flight `i` draws from `numpy.random.default_rng(seed + i)` as `write_flights` does: the
     input cycles through `INPUT_CYCLE`, the amplitude is `RAW_AMPLITUDE[axis] x U(0.8, 1.25)`,
@@ -183,12 +223,12 @@ def write_raw_flights(out_dir, raw: str = "fwid", n_flights: int = 4, axis: str 
                 "start": rng.uniform(0.8, 1.3)}
         sim_seed = int(rng.integers(2**31 - 1))
         args.update(kw)
-        rec = simulate_raw(axis=axis, seed=sim_seed, onboard=raw == "motive", **args)
+        rec = simulate_raw(axis=axis, seed=sim_seed, onboard=raw in WITH_LOG, **args)
         name = f"{stem}_{i}"
-        if raw == "fwid":
-            paths.append(write_fwid_raw(out / f"{name}.csv", rec, seed=sim_seed))
-        else:
-            paths.append(write_motive(out / f"{name}.csv", rec))
+        paths.append(write_take(out / f"{name}{SUFFIX[raw]}", rec, raw, seed=sim_seed))
+        if raw in WITH_LOG:
             write_onboard(out / f"{name}.onboard.csv", rec)
         write_truth(out, name, rec, vehicle)
+    if raw == "matlab":
+        _write_text(out / MAP_NAME, LAB_MAP)
     return paths

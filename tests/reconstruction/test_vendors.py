@@ -4,19 +4,19 @@ a known pose, read like the fwid raw CSV of the same pose; the real Nexus export
 
 import numpy as np
 import pytest
-from scipy.io import savemat
 from scipy.spatial.transform import Rotation
 
 from fwid import FlightDataError
 from fwid.cli import main
 from fwid.reconstruction import read_raw
+from fwid.synth import write_nexus as nexus, write_qtm_mat as qtm_mat, write_qtm_tsv as qtm_tsv
 
 from .helpers import REAL, Motion, noisy, write_fwid_raw
 
 RATE = 200.0
 T = np.arange(0, 2, 1 / RATE)
-C_ZUP = np.diag([1.0, -1.0, -1.0])  # z-up <-> NED
 LOST = (40, 45)
+TRACKED = ~((np.arange(len(T)) >= LOST[0]) & (np.arange(len(T)) < LOST[1]))
 
 
 @pytest.fixture(scope="module")
@@ -31,11 +31,6 @@ def ref(pose, tmp_path_factory):
                                    lost=[LOST]))
 
 
-def _zup(pose):
-    pos, R = pose
-    return 1e3 * pos @ C_ZUP, C_ZUP @ R @ C_ZUP
-
-
 def _same(a, b, rows=slice(None)):
     assert np.array_equal(a.tracked, b.tracked[rows])
     ok = a.tracked
@@ -46,23 +41,7 @@ def _same(a, b, rows=slice(None)):
 
 
 def write_nexus(path, pose, euler=None, bodies=("fly:body", "wand:tip")):
-    pos, R = _zup(pose)
-    if euler:  # the angles about X, Y, Z, in the columns RX, RY, RZ
-        ang = Rotation.from_matrix(R).as_euler(euler, degrees=True)
-        rot = ang[:, [euler.index(c) for c in "XYZ"]]
-    else:
-        rot = np.rad2deg(Rotation.from_matrix(R).as_rotvec())
-    name = f"Segments (Euler {euler})" if euler else "Segments"
-    lines = [name, f"{RATE:g}", ",," + ",,,,,,".join(bodies) + ",,,,,",
-             "Frame,Sub Frame" + ",RX,RY,RZ,TX,TY,TZ" * len(bodies),
-             ",," + ",".join(["deg,deg,deg,mm,mm,mm"] * len(bodies))]
-    for i in range(len(T)):
-        cells = [f"{v:.9f}" for v in (*rot[i], *pos[i])]
-        if LOST[0] <= i < LOST[1]:
-            cells = [""] * 6
-        lines.append(",".join([str(i + 1), "0", *cells, *["0"] * 6 * (len(bodies) - 1)]))
-    path.write_bytes(("\ufeff" + "\r\n".join(lines) + "\r\n\r\nTrajectories\r\n").encode())
-    return path
+    return nexus(path, T, *pose, TRACKED, bodies=bodies, euler=euler)
 
 
 @pytest.mark.parametrize("euler", [None, "XYZ", "ZYX"])
@@ -115,29 +94,9 @@ def test_real_nexus_export_reads():
     assert np.median(np.abs(big @ axis) / np.linalg.norm(big, axis=1)) > 0.9
 
 
-def write_qtm_tsv(path, pose, start=1, bodies=("Wand", "DelFly")):
-    pos, R = _zup(pose)
-    rpy = Rotation.from_matrix(R).as_euler("XYZ", degrees=True)
-    rot = R.transpose(0, 2, 1).reshape(-1, 9)  # column by column
-    n = len(T) - (start - 1)
-    head = [f"NO_OF_FRAMES\t{n}", "NO_OF_CAMERAS\t8", f"NO_OF_BODIES\t{len(bodies)}",
-            f"FREQUENCY\t{RATE:g}", "NO_OF_ANALOG\t0", "ANALOG_FREQUENCY\t0",
-            "DESCRIPTION\t--", "TIME_STAMP\t2026-11-28, 10:00:00.000\t1234.5",
-            "DATA_INCLUDED\t6D", "BODY_NAMES\t" + "\t".join(bodies),
-            "BODY_FILTERS\t" + "\t".join(["Default"] * len(bodies)),
-            "TRANSLATION_ORIGIN\t" + "\t".join(["Global"] * len(bodies)),
-            "ROTATION_ORIGIN\t" + "\t".join(["Global"] * len(bodies))]
-    comps = "X\tY\tZ\tRoll\tPitch\tYaw\tResidual\t" + "\t".join(f"Rot[{k}]" for k in range(9))
-    head.append("Frame\tTime\t" + "\t\t".join(f"{b} {comps}" for b in bodies))
-    for i in range(start - 1, len(T)):
-        mine = [f"{v:.9f}" for v in (*pos[i], *rpy[i], 0.8, *rot[i])]
-        if LOST[0] <= i < LOST[1]:
-            mine = [""] * 16
-        other = ["0"] * 6 + ["1.0"] + [str(v) for v in np.eye(3).ravel()]
-        cells = ["\t".join(mine if b == "DelFly" else other) for b in bodies]
-        head.append(f"{i + 1}\t{i / RATE:.5f}\t" + "\t\t".join(cells))
-    path.write_text("\n".join(head) + "\n")
-    return path
+def write_qtm_tsv(path, pose, start=1):
+    rows = slice(start - 1, None)
+    return qtm_tsv(path, T[rows], pose[0][rows], pose[1][rows], TRACKED[rows])
 
 
 def test_qtm_tsv_reads_like_the_fwid_raw_twin(tmp_path, pose, ref):
@@ -195,20 +154,7 @@ def test_qtm_row_order_told_by_the_euler_angles(tmp_path, pose, ref):
 
 
 def write_qtm_mat(path, pose):
-    pos, R = _zup(pose)
-    n = len(T)
-    pos3 = np.stack([np.zeros((3, n)), pos.T])
-    rot = R.transpose(0, 2, 1).reshape(-1, 9).T
-    rot9 = np.stack([np.tile(np.eye(3).reshape(9, 1), n), rot])
-    pos3[1][:, LOST[0]:LOST[1]] = np.nan
-    rot9[1][:, LOST[0]:LOST[1]] = np.nan
-    rpy = np.stack([np.zeros((3, n)), Rotation.from_matrix(R).as_euler("XYZ", True).T])
-    meas = {"File": "take.qtm", "FrameRate": RATE, "Frames": n, "StartFrame": 1,
-            "RigidBodies": {"Bodies": 2, "Name": np.array(["Wand", "DelFly"], dtype=object),
-                            "Positions": pos3, "Rotations": rot9, "RPYs": rpy,
-                            "Residual": np.ones((2, 1, n))}}
-    savemat(path, {"take": meas})
-    return path
+    return qtm_mat(path, T, *pose, TRACKED)
 
 
 def test_qtm_mat_reads_like_the_fwid_raw_twin(tmp_path, pose, ref):
