@@ -11,24 +11,14 @@ import fwid
 from fwid import FlightDataError
 from fwid.cli import main
 from fwid.reconstruction import read_raw
+from fwid.synth._labmat import LAB_MAP
 
 from .helpers import Motion, write_vehicle
 from .test_map import MAP, T, lab_columns, write_columns
 
-MAT_MAP = """
-[time]
-column = "record_time_stamp"
-unit = "ms"
-
-[tracking]
-position = ["record_Sensor_data[0]", "record_Sensor_data[1]", "record_Sensor_data[2]"]
-position_unit = "mm"
-frame = "z-up"
-attitude = ["record_Sensor_data[3]", "record_Sensor_data[4]", "record_Sensor_data[5]"]
-attitude_unit = "deg"
-euler = "ZYX"
-
-[onboard]
+#: The lab's MATLAB map (the simulator's, `fwid.synth._labmat.LAB_MAP`) with the onboard
+#: accelerometer in a struct.
+MAT_MAP = LAB_MAP.split("[onboard]")[0] + """[onboard]
 file = "{name}.mat"
 acc = ["imu.acc[0,0]", "imu.acc[1,0]", "imu.acc[2,0]"]
 acc_unit = "g"
