@@ -287,7 +287,9 @@ def promise_case(rec: dict, most: int) -> dict:
     again = run_case({**case, "n": n}, peer=False)
     out.update(verdict=again.get("verdict"), error=again.get("error"),
                found=rec["effect"] in (again.get("effects") or []) or
-               again.get("verdict") == rec["effect"], wall_s=again.get("wall_s"))
+               again.get("verdict") == rec["effect"], wall_s=again.get("wall_s"),
+               rerun_first_round=(again.get("first_round") or {}).get(rec["effect"]),
+               rerun_limit_pct=(again.get("detection") or {}).get("limit_pct"))
     return out
 
 
