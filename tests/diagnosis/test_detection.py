@@ -67,11 +67,16 @@ def test_a_gain_at_the_limit_is_found_with_eighty_percent_power():
     assert np.mean(found) >= 0.77
 
 
-def test_the_spread_is_the_median_over_the_catalogue_entries():
+def test_the_spread_is_the_strongest_entrys_not_below_the_median():
     rng = np.random.default_rng(2)
-    first = {n: Evidence(n, (), rng.normal(0, s, size=40), {}, {})
-             for n, s in (("a", 0.1), ("b", 0.2), ("c", 0.4), ("probe", 5.0))}
-    lim = detection_limit(first, ["a", "b", "c"], 0.01, 0.02, 3, 2)
-    assert lim.sd == pytest.approx(float(np.std(first["b"].d, ddof=1)))
+    first = {n: Evidence(n, (), rng.normal(m, s, size=40), {}, {})
+             for n, m, s in (("a", 0.0, 0.1), ("b", 0.0, 0.2), ("c", 0.0, 0.4),
+                             ("strong", 0.3, 0.3), ("probe", 5.0, 5.0))}
+    lim = detection_limit(first, ["a", "b", "c", "strong"], 0.01, 0.02, 3, 2)
+    assert lim.sd == pytest.approx(float(np.std(first["strong"].d, ddof=1)))
+    quiet = {**first, "strong": Evidence("strong", (), rng.normal(0.3, 0.01, size=40), {}, {})}
+    lim = detection_limit(quiet, ["a", "b", "c", "strong"], 0.01, 0.02, 3, 2)
+    spreads = [float(np.std(quiet[n].d, ddof=1)) for n in ("a", "b", "c", "strong")]
+    assert lim.sd == pytest.approx(float(np.median(spreads)))
     assert (lim.flights, lim.train, lim.test, lim.blocks) == (5, 3, 2, 40)
     assert detection_limit(first, ["missing"], 0.01, 0.02, 3, 2) is None
