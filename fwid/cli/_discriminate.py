@@ -338,10 +338,12 @@ def discriminate(args) -> int:
                 "rate": args.rate, "attitude_limit": args.attitude_limit,
                 "restarts": args.restarts, "seed": args.seed, "by": args.discriminate_by}
     if args.amplitude is None:  # the next flight the diagnosis designed, again
-        recorded = (diag.get("next_flight") or {}).get("design")
+        nxt = diag.get("next_flight") or {}
+        recorded = nxt.get("design")
         if recorded is None:
+            why = f" (its design failed: {nxt['failed']})" if nxt.get("failed") else ""
             raise InputError(f"{path}: the diagnosis designed no next flight to take the "
-                             "settings from; give --amplitude (peak deflection [rad])")
+                             f"settings from{why}; give --amplitude (peak deflection [rad])")
         settings = {**settings, **recorded}
     check_limits(settings["duration"], settings["amplitude"], settings["quiet"],
                  settings["rate"], settings["switch_rate"])

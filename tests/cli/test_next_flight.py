@@ -77,6 +77,11 @@ def test_the_next_flight_is_written_and_design_discriminate_designs_it_again(
     (out / "diagnosis.json").write_text(json.dumps(diag))
     assert main(["design", "--discriminate", str(out), "--out", str(root / "x")]) == 2
     assert "--amplitude" in capsys.readouterr().err
+    failed = {"tell_apart": ["actuator-dynamics", "time-offset"], "failed": "InputError: why"}
+    (out / "diagnosis.json").write_text(json.dumps({**diag, "next_flight": failed}))
+    assert main(["design", "--discriminate", str(out), "--out", str(root / "x")]) == 2
+    err = capsys.readouterr().err
+    assert "its design failed: InputError: why" in err and len(err.strip().splitlines()) == 1
 
 
 def test_the_summary_names_the_pair_and_the_file():
