@@ -335,21 +335,17 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"diagnosis_power_{args.half}"
     t0 = time.perf_counter()
-    results = []
-    with open(stem.with_suffix(".jsonl"), "w") as fh, \
-            mp.get_context("spawn").Pool(args.workers) as pool:
-        fh.write(_provenance.jsonl_first_line())
-        work = functools.partial(run_case, peer=not args.no_peer)
-        for i, r in enumerate(pool.imap_unordered(work, todo), 1):
-            results.append(r)
-            fh.write(json.dumps(r) + "\n")
-            fh.flush()
-            p = r.get("sindy")
-            peer = (f"; sindy {p.get('verdict', p.get('error'))} ({p['wall_s']:.1f} s)"
-                    if p else "")
-            print(f"[{i}/{len(todo)}] {r['kind']} {r['effect']}/{r['form']} s={r['strength']:g} "
-                  f"{r['n']}+{r['n']} {r['axis']}: {r.get('verdict', r.get('error'))} "
-                  f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s){peer}", flush=True)
+
+    def line(r):
+        p = r.get("sindy")
+        peer = f"; sindy {p.get('verdict', p.get('error'))} ({p['wall_s']:.1f} s)" if p else ""
+        return (f"{r['kind']} {r['effect']}/{r['form']} s={r['strength']:g} "
+                f"{r['n']}+{r['n']} {r['axis']}: {r.get('verdict', r.get('error'))} "
+                f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s){peer}")
+
+    results = run_pool(stem.with_suffix(".jsonl"), functools.partial(run_case,
+                                                                     peer=not args.no_peer),
+                       todo, args.workers, line)
     promised = run_promise(results, stem, args) if args.promise else None
     cmd = "python benchmarks/diagnosis_power.py " + " ".join(sys.argv[1:] if argv is None else argv)
     summarise(results, stem, note=f"`{cmd}`, {args.workers} worker(s), "
@@ -360,18 +356,24 @@ def run_promise(results: list[dict], stem: Path, args) -> list[dict]:
     """`--promise`: every weak case with a finite flight count rerun at it
     (`promise_case`), one line each in `{stem}_promise.jsonl`."""
     weak = [r for r in results if r.get("flights_for_truth")]
+    return run_pool(Path(f"{stem}_promise.jsonl"),
+                    functools.partial(promise_case, most=args.promise_max), weak, args.workers,
+                    lambda r: (f"promise: {r['effect']}/{r['form']} truth gain "
+                               f"{r['truth_gain_pct']:.2f} %: {r['flights_for_truth']} flights "
+                               f"-> {r.get('skipped') or r.get('verdict', r.get('error'))}"))
+
+
+def run_pool(path: Path, work, todo: list, workers: int, line) -> list[dict]:
+    """`work` on every item of `todo` in `workers` processes, each result one JSON line in
+    `path` (after the provenance line) as it comes and one progress line (`line(result)`)."""
     out = []
-    path = Path(f"{stem}_promise.jsonl")
-    with open(path, "w") as fh, mp.get_context("spawn").Pool(args.workers) as pool:
+    with open(path, "w") as fh, mp.get_context("spawn").Pool(workers) as pool:
         fh.write(_provenance.jsonl_first_line())
-        work = functools.partial(promise_case, most=args.promise_max)
-        for i, r in enumerate(pool.imap_unordered(work, weak), 1):
+        for i, r in enumerate(pool.imap_unordered(work, todo), 1):
             out.append(r)
             fh.write(json.dumps(r) + "\n")
             fh.flush()
-            print(f"[promise {i}/{len(weak)}] {r['effect']}/{r['form']} truth gain "
-                  f"{r['truth_gain_pct']:.2f} %: {r['flights_for_truth']} flights -> "
-                  f"{r.get('skipped') or r.get('verdict', r.get('error'))}", flush=True)
+            print(f"[{i}/{len(todo)}] {line(r)}", flush=True)
     return out
 
 
