@@ -20,9 +20,9 @@ spread more than noise does: it shows more in the blocks that excite it than in 
 so the spread grows with the effect (on the benchmark's flights, an effect's own spread is
 about its mean score or more, where an entry that fits nothing spreads a few times less).
 The strongest entry seen carries that growth; the median is the noise's. Nothing is tuned:
-the level, the power, the floor and the blocks are the selection's own. The limit is that of the selection's test; the
-verdict also asks the confidence set to keep the effect ahead of `none`, a test of the same
-scores with the same charge.
+the level, the power, the floor and the blocks are the selection's own. The limit is that
+of the selection's test; the verdict also asks the confidence set to keep the effect ahead
+of `none`, a test of the same scores with the same charge.
 """
 
 from __future__ import annotations
