@@ -342,7 +342,46 @@ def figure(results, path: Path) -> None:
     plt.close(fig)
 
 
-def summarise(results: list[dict], stem: Path, note: str = "") -> str:
+def truth_gain_table(results, promised=None, weak: float = 4.0) -> list[str]:
+    """Single cases split by their truth's own held-out gain at `weak` %: right verdicts on
+    each side; for the weak ones fwid's flights for that gain; and, with `promised` (the
+    `--promise` reruns), how often the effect was named at those flights."""
+    rows = [r for r in results if r.get("kind") == "single" and "truth_gain_pct" in r]
+    if not rows:
+        return ["(no truth gains recorded)"]
+    strong = [r for r in rows if r["truth_gain_pct"] >= weak]
+    low = [r for r in rows if r["truth_gain_pct"] < weak]
+    out = ["| truth's held-out gain | cases | right | fwid's limit % (median) |",
+           "|---|---:|---:|---:|"]
+    for name, rr in ((f">= {weak:g} %", strong), (f"< {weak:g} %", low)):
+        lim = sorted(r["detection"]["limit_pct"] for r in rr if r.get("detection"))
+        out.append(f"| {name} | {len(rr)} | {_frac(rr)} | "
+                   + (f"{lim[len(lim) // 2]:.1f} |" if lim else "- |"))
+    never = [r for r in low if r.get("flights_for_truth") is None]
+    out += ["", f"Weak cases: {len(low)}; fwid says no number of flights finds the gain of "
+            f"{len(never)} (at or below the smallest gain that counts, or negative).", "",
+            "| effect | form | flights | truth gain % | flights fwid says | rerun: named |",
+            "|---|---|---|---:|---:|---|"]
+    by_key = {(p["effect"], p["form"], p["strength"], p["n"], p["seed"]): p
+              for p in promised or []}
+    for r in low:
+        p = by_key.get((r["effect"], r["form"], r["strength"], r["n"], r["seed"]))
+        res = "-" if p is None else (p.get("skipped") or p.get("error") or
+                                     ("yes" if p["found"] else f"no ({p['verdict']})"))
+        out.append(f"| {r['effect']} | {r['form']} | {r['n']}+{r['n']} | "
+                   f"{r['truth_gain_pct']:.2f} | {r.get('flights_for_truth') or 'never'} | "
+                   f"{res} |")
+    if promised:
+        ran = [p for p in promised if "found" in p]
+        hit = sum(p["found"] for p in ran)
+        out += ["", f"The promise (named at fwid's flight count, target >= 80 %): {hit}/"
+                f"{len(ran)}" + (f" ({100 * hit / len(ran):.0f} %)" if ran else "")
+                + f"; {len(promised) - len(ran)} skipped (too many flights)."]
+    return out
+
+
+def summarise(results: list[dict], stem: Path, note: str = "",
+              promised: list[dict] | None = None) -> str:
     """Write `stem.md` and `stem.png`; return the Markdown."""
     stem = Path(stem)
     errors = [r for r in results if "error" in r]
@@ -363,6 +402,8 @@ def summarise(results: list[dict], stem: Path, note: str = "") -> str:
           "## Spurious further effects", "", *extras(results), "",
           "## The confidence set of explanations", "", *set_table(results), "",
           "## A peer beside fwid (the same flights)", "", *peer_table(results), "",
+          "## The detection limit's promise (split by the truth's held-out gain)", "",
+          *truth_gain_table(results, promised), "",
           f"![power curves]({stem.name}.png)", ""]
     text = "\n".join(md)
     stem.with_suffix(".md").write_text(_provenance.markdown(text))

@@ -317,11 +317,11 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             row["pair_told_apart"] = [p[0] for p in pair]
             row["truth_in_pair"] = true in row["pair_told_apart"]
             t0 = time.perf_counter()
-            models, maps, held, consts, R = discriminating_models("lon", pair, train)
             added = ADDED_DURATION or DISC_DURATION
-            row["held"] = held
-            loads = load_maps(models, maps, consts) if DISC_BY == "loads" else (None, None)
             try:
+                models, maps, held, consts, R = discriminating_models("lon", pair, train)
+                row["held"] = held
+                loads = load_maps(models, maps, consts) if DISC_BY == "loads" else (None, None)
                 disc = fwid.design_discriminating(
                     models[0], models[1], consts=consts, R=R, amplitude=DISC_AMPLITUDE,
                     duration=added, quiet=QUIET, inputs_a=maps[0], inputs_b=maps[1],

@@ -33,6 +33,17 @@ row beside fwid's) and the power curves `diagnosis_power_{half}.png` (`_power_su
     python benchmarks/diagnosis_power.py --half dev [--seeds 2] [--workers 1] [--limit N]
         [--subset kind=single effect=flap-coupling ... [\| kind=pair ...]] [--out ...] [--no-peer]
     python benchmarks/diagnosis_power.py --summarise benchmarks/results/diagnosis_power_dev.jsonl
+
+**The detection limit's promise** (`--promise`): every single case records its truth's own
+held-out gain (`truth_gain_pct`: the first-round cross-fitted gain of the true effect's
+catalogue family, the family sized inside the fitting flights, so the model with the true
+effect as the catalogue can fit it) and fwid's `detection` block. A case whose truth gains less
+than `WEAK_PCT` is weak; fwid says how many flights of the same kind find its gain with 80 %
+power (`flights_for_truth`, `fwid.diagnosis._detection.flights_needed`). `--promise` reruns
+every weak case at that count (training and test halves as the case splits them, at most
+`--promise-max` a side) and counts how often the effect is then named; the promise holds when
+that is at least 80 %. Lines in `results/diagnosis_power_{half}_promise.jsonl`, the table in
+the summary.
 """
 
 from __future__ import annotations
@@ -61,6 +72,8 @@ CLEAN_PER_COUNT = 4
 PAIR_COUNT = 6
 RATES = (100.0, 200.0, 300.0, 500.0)
 INPUTS = ("cycle", "3211", "211", "doublet", "pulse")
+#: Held-out gain [%] of the truth below which a case is weak (the promise is checked on it).
+WEAK_PCT = 4.0
 HALVES = ("dev", "heldout")
 #: Forms in the held-out half only, whatever their index: members of a family that the
 #: development half never shows (the family, not a form, must generalise).
@@ -234,10 +247,50 @@ def run_case(case: dict, peer: bool = True) -> dict:
     if u:
         rec["unexplained"] = {k: u.get(k) for k in ("probe", "drivers", "test_shrink_pct", "p",
                                                     "redness_after")}
-    for k in ("disturbance", "first_round", "rounds", "confidence_set"):
+    for k in ("disturbance", "first_round", "rounds", "confidence_set", "detection"):
         if getattr(diag, k, None) is not None:
             rec[k] = getattr(diag, k)
+    truth_gain(rec)
     return rec
+
+
+def truth_gain(rec: dict) -> None:
+    """`rec` (a single case's) gains `truth_gain_pct` (its true effect's first-round
+    cross-fitted gain) and, when below `WEAK_PCT`, `flights_for_truth` (fwid's flights for
+    that gain, training and test together; `None`: no number finds it)."""
+    from fwid.diagnosis._detection import flights_needed
+
+    first = (rec.get("first_round") or {}).get(rec["effect"])
+    if rec["kind"] != "single" or first is None:
+        return
+    rec["truth_gain_pct"] = first["gain_pct"]
+    if first["gain_pct"] < WEAK_PCT and rec.get("detection"):
+        rec["flights_for_truth"] = flights_needed(rec["detection"], max(first["gain_pct"], 0.0))
+
+
+def promise_case(rec: dict, most: int) -> dict:
+    """Rerun the weak case `rec` at fwid's flight count for its truth's gain (half for
+    training, half for test, at most `most` a side): was the effect named?"""
+    import math
+
+    m = rec["flights_for_truth"]
+    n = math.ceil(m / 2)
+    out = {k: rec[k] for k in ("kind", "effect", "form", "strength", "n", "seed", "axis",
+                               "truth_gain_pct")}
+    out.update(flights_for_truth=m, n_promise=n)
+    if n > most:
+        out["skipped"] = f"needs {n} flights a side (> {most})"
+        return out
+    case = {k: v for k, v in rec.items() if k in ("kind", "effect", "form", "strength", "seed",
+                                                    "rep", "axis", "vehicle_seed", "noise",
+                                                    "duration", "rate", "input")}
+    again = run_case({**case, "n": n}, peer=False)
+    out.update(verdict=again.get("verdict"), error=again.get("error"),
+               found=rec["effect"] in (again.get("effects") or []) or
+               again.get("verdict") == rec["effect"], wall_s=again.get("wall_s"),
+               rerun_first_round=(again.get("first_round") or {}).get(rec["effect"]),
+               rerun_limit_pct=(again.get("detection") or {}).get("limit_pct"))
+    return out
 
 
 def main(argv=None):
@@ -254,12 +307,23 @@ def main(argv=None):
     ap.add_argument("--no-peer", action="store_true",
                     help="skip the SINDy peer (by default it runs on every case's flights)")
     ap.add_argument("--summarise", metavar="FILE.jsonl", help="only rewrite the summary")
+    ap.add_argument("--promise", action="store_true",
+                    help=f"rerun each weak case (truth gain < {WEAK_PCT:g} %%) at the flights "
+                         "fwid says find its gain; with --summarise, from that file's cases")
+    ap.add_argument("--promise-max", type=int, default=16,
+                    help="most flights a side a promise rerun may take")
     args = ap.parse_args(argv)
 
     if args.summarise:
         path = Path(args.summarise)
         results = _provenance.records(path)
-        summarise(results, path.with_suffix(""), note=f"recomputed from {path.name}")
+        for r in results:
+            if "truth_gain_pct" not in r and "error" not in r:
+                truth_gain(r)
+        promised = (run_promise(results, path.with_suffix(""), args) if args.promise else
+                    _promised(path.with_suffix("")))
+        summarise(results, path.with_suffix(""), note=f"recomputed from {path.name}",
+                  promised=promised)
         return
     todo = select(cases(args.half, args.seeds), args.subset, args.limit)
     if args.list:
@@ -271,24 +335,52 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"diagnosis_power_{args.half}"
     t0 = time.perf_counter()
-    results = []
-    with open(stem.with_suffix(".jsonl"), "w") as fh, \
-            mp.get_context("spawn").Pool(args.workers) as pool:
-        fh.write(_provenance.jsonl_first_line())
-        work = functools.partial(run_case, peer=not args.no_peer)
-        for i, r in enumerate(pool.imap_unordered(work, todo), 1):
-            results.append(r)
-            fh.write(json.dumps(r) + "\n")
-            fh.flush()
-            p = r.get("sindy")
-            peer = (f"; sindy {p.get('verdict', p.get('error'))} ({p['wall_s']:.1f} s)"
-                    if p else "")
-            print(f"[{i}/{len(todo)}] {r['kind']} {r['effect']}/{r['form']} s={r['strength']:g} "
-                  f"{r['n']}+{r['n']} {r['axis']}: {r.get('verdict', r.get('error'))} "
-                  f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s){peer}", flush=True)
+
+    def line(r):
+        p = r.get("sindy")
+        peer = f"; sindy {p.get('verdict', p.get('error'))} ({p['wall_s']:.1f} s)" if p else ""
+        return (f"{r['kind']} {r['effect']}/{r['form']} s={r['strength']:g} "
+                f"{r['n']}+{r['n']} {r['axis']}: {r.get('verdict', r.get('error'))} "
+                f"effects={r.get('effects')} ({r.get('wall_s', 0):.1f} s){peer}")
+
+    results = run_pool(stem.with_suffix(".jsonl"), functools.partial(run_case,
+                                                                     peer=not args.no_peer),
+                       todo, args.workers, line)
+    promised = run_promise(results, stem, args) if args.promise else None
     cmd = "python benchmarks/diagnosis_power.py " + " ".join(sys.argv[1:] if argv is None else argv)
     summarise(results, stem, note=f"`{cmd}`, {args.workers} worker(s), "
-              f"{time.perf_counter() - t0:.0f} s")
+              f"{time.perf_counter() - t0:.0f} s", promised=promised)
+
+
+def run_promise(results: list[dict], stem: Path, args) -> list[dict]:
+    """`--promise`: every weak case with a finite flight count rerun at it
+    (`promise_case`), one line each in `{stem}_promise.jsonl`."""
+    weak = [r for r in results if r.get("flights_for_truth")]
+    return run_pool(Path(f"{stem}_promise.jsonl"),
+                    functools.partial(promise_case, most=args.promise_max), weak, args.workers,
+                    lambda r: (f"promise: {r['effect']}/{r['form']} truth gain "
+                               f"{r['truth_gain_pct']:.2f} %: {r['flights_for_truth']} flights "
+                               f"-> {r.get('skipped') or r.get('verdict', r.get('error'))}"))
+
+
+def run_pool(path: Path, work, todo: list, workers: int, line) -> list[dict]:
+    """`work` on every item of `todo` in `workers` processes, each result one JSON line in
+    `path` (after the provenance line) as it comes and one progress line (`line(result)`)."""
+    out = []
+    with open(path, "w") as fh, mp.get_context("spawn").Pool(workers) as pool:
+        fh.write(_provenance.jsonl_first_line())
+        for i, r in enumerate(pool.imap_unordered(work, todo), 1):
+            out.append(r)
+            fh.write(json.dumps(r) + "\n")
+            fh.flush()
+            print(f"[{i}/{len(todo)}] {line(r)}", flush=True)
+    return out
+
+
+def _promised(stem: Path) -> list[dict] | None:
+    """The promise reruns recorded beside `stem`, if any."""
+    path = Path(f"{stem}_promise.jsonl")
+    return _provenance.records(path) if path.is_file() else None
 
 
 if __name__ == "__main__":

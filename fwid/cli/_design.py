@@ -19,6 +19,9 @@ def design(args) -> int:
     if args.model is None or args.source is None:
         raise InputError("design: give --model lon|lat and --from REPORT.json (the report of "
                          "`fwid identify --out DIR`)")
+    if args.amplitude is None:
+        raise InputError("design: give --amplitude (the peak deflection [rad], perturbation "
+                         "from trim)")
     from fwid.design._design import check_limits
 
     check_limits(args.duration, args.amplitude, args.quiet, args.rate, args.switch_rate)

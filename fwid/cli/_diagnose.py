@@ -35,6 +35,12 @@ def diagnose(args) -> int:
                      "train_paths": [str(Path(r.path).resolve()) for r in train_records],
                      "test_paths": [str(Path(r.path).resolve()) for r in test_records],
                      **({} if window is None else {"window": list(window)})}
+    if args.out and not args.no_next_flight and diag.next_flight is not None:
+        from ._discriminate import next_flight_input
+
+        if say:
+            say("designing the next flight that tells the two leading explanations apart")
+        diag.next_input = next_flight_input(diag.to_json(), train, Path(args.out), say)
     print(diagnosis_summary(diag))
     if args.out:
         out = Path(args.out)

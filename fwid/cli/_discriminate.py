@@ -242,10 +242,86 @@ def load_maps(models, maps, consts):
     return [one(m, mp) for m, mp in zip(models, maps)]
 
 
+#: The design of `fwid diagnose --out`'s next flight: `fwid design`'s defaults, the amplitude
+#: that of the flights flown (`flown_amplitude`).
+NEXT_FLIGHT = {"duration": 5.0, "quiet": 1.0, "parametrisation": "steps", "switch_rate": 10.0,
+               "rate": 100.0, "attitude_limit": None, "restarts": 16, "seed": 0,
+               "by": "loads"}
+#: The control of each axis.
+CONTROL = {"lon": "de", "lat": "dr"}
+
+
+def flown_amplitude(flights, axis: str) -> float:
+    """The amplitude of the manoeuvres flown: the median over `flights` of half the
+    peak-to-peak of the axis's control (rad). The designed flight is then of the same kind
+    as those the diagnosis saw, as its models were fitted on them."""
+    import numpy as np
+
+    c = CONTROL[axis]
+    return float(np.median([0.5 * float(np.ptp(np.asarray(f[c]))) for f in flights]))
+
+
+def design_for(diag: dict, flights, settings: dict, say=None):
+    """The discriminating input of the diagnosis `diag` (`diagnosis.json`) designed on both
+    fitted models (`discriminating_models` on `flights`) with `settings` (the keys of
+    `NEXT_FLIGHT` and `amplitude`): the `Discrimination`, the record of the pair for
+    `design.json` and the pair."""
+    import fwid
+
+    axis = diag.get("axis", "lon")
+    pair = close_pair(diag)
+    models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
+    by = settings["by"]
+    loads = load_maps(models, maps, consts) if by == "loads" else (None, None)
+    limit = settings["attitude_limit"]
+    d = fwid.design_discriminating(
+        models[0], models[1], consts=consts, R=R, amplitude=settings["amplitude"],
+        duration=settings["duration"], quiet=settings["quiet"], inputs_a=maps[0],
+        inputs_b=maps[1], parametrisation=settings["parametrisation"],
+        switch_rate=settings["switch_rate"], rate=settings["rate"],
+        attitude={"lon": "theta", "lat": "phi"}[axis],
+        attitude_bound="3211" if limit is None else 0.8 * limit,
+        restarts=settings["restarts"], seed=settings["seed"], progress=say or False,
+        loads_a=loads[0], loads_b=loads[1])
+    info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
+            "refit_on": [f.name for f in flights], "held": held, "compared": by,
+            **({"S": "each load's standard deviation along model a's prediction of the "
+                     "reference 3211"} if by == "loads" else
+               {"R": "the baseline's joint fit (Eq. 11)"})}
+    return d, info, pair
+
+
+def next_flight_input(diag: dict, flights, out: Path, say=None, **settings) -> dict:
+    """`fwid diagnose --out`'s discriminating input for an ambiguous set: designed on both
+    fitted models (`design_for`, `NEXT_FLIGHT` at the `flown_amplitude` of the training
+    `flights`), written to `out/next_flight.csv` (the format of `fwid design`'s
+    `input.csv`); returns what `diagnosis.json`'s `next_flight` gains: the file, the
+    settings (`fwid design --discriminate` without `--amplitude` takes them), the
+    criterion and the limits; `{"failed": reason}` when the design failed (the diagnosis
+    stands). `settings`: any of `NEXT_FLIGHT`'s, changed."""
+    from fwid._errors import FwidError
+    from fwid.diagnosis._diagnose import failed_block
+    from fwid.report._design import discrimination_csv
+    from fwid.report._json import write_text
+
+    axis = diag.get("axis", "lon")
+    settings = {**NEXT_FLIGHT, "amplitude": flown_amplitude(flights, axis), **settings}
+    try:
+        d, info, _ = design_for(diag, flights, settings, say)
+    except (FwidError, ArithmeticError, ValueError) as exc:
+        return failed_block(exc, "next-flight design")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "next_flight.csv", discrimination_csv(d, CONTROL[axis]))
+    return {"input": "next_flight.csv", "control": CONTROL[axis], "samples": int(d.t.size),
+            "design": settings, "held": info["held"], "compared": info["compared"],
+            "criterion": d.to_json()["criterion"], "chosen": d.settings["chosen"],
+            "limits": d.limits}
+
+
 def discriminate(args) -> int:
     from fwid.design._design import check_limits
 
-    check_limits(args.duration, args.amplitude, args.quiet, args.rate, args.switch_rate)
     path = Path(args.discriminate) / "diagnosis.json"
     if not path.is_file():
         raise InputError(f"{path}: no such file; give the folder `fwid diagnose --out DIR` "
@@ -257,7 +333,20 @@ def discriminate(args) -> int:
     axis = diag.get("axis")
     if args.model is not None and args.model != axis:
         raise InputError(f"{path}: the diagnosis is of the {axis!r} axis, not {args.model!r}")
-    pair = close_pair(diag)
+    settings = {"duration": args.duration, "quiet": args.quiet, "amplitude": args.amplitude,
+                "parametrisation": args.parametrisation, "switch_rate": args.switch_rate,
+                "rate": args.rate, "attitude_limit": args.attitude_limit,
+                "restarts": args.restarts, "seed": args.seed, "by": args.discriminate_by}
+    if args.amplitude is None:  # the next flight the diagnosis designed, again
+        nxt = diag.get("next_flight") or {}
+        recorded = nxt.get("design")
+        if recorded is None:
+            why = f" (its design failed: {nxt['failed']})" if nxt.get("failed") else ""
+            raise InputError(f"{path}: the diagnosis designed no next flight to take the "
+                             f"settings from{why}; give --amplitude (peak deflection [rad])")
+        settings = {**settings, **recorded}
+    check_limits(settings["duration"], settings["amplitude"], settings["quiet"],
+                 settings["rate"], settings["switch_rate"])
     train = args.train or diag.get("method", {}).get("train_paths")
     if not train:
         raise InputError(f"{path}: the diagnosis names its training flights "
@@ -274,30 +363,15 @@ def discriminate(args) -> int:
 
     flights = fwid.data.build_flights(records)
     say = (lambda m: print(f"fwid: {m}", file=sys.stderr)) if not args.quiet_progress else None
-    models, maps, held, consts, R = discriminating_models(axis, pair, flights, say)
-    by = args.discriminate_by
-    loads = load_maps(models, maps, consts) if by == "loads" else (None, None)
-    d = fwid.design_discriminating(
-        models[0], models[1], consts=consts, R=R, amplitude=args.amplitude,
-        duration=args.duration, quiet=args.quiet, inputs_a=maps[0], inputs_b=maps[1],
-        parametrisation=args.parametrisation, switch_rate=args.switch_rate, rate=args.rate,
-        attitude={"lon": "theta", "lat": "phi"}[axis],
-        attitude_bound="3211" if args.attitude_limit is None else 0.8 * args.attitude_limit,
-        restarts=args.restarts, seed=args.seed, progress=say or False, loads_a=loads[0],
-        loads_b=loads[1])
-    control = {"lon": "de", "lat": "dr"}[axis]
-    info = {"pair": [{"effect": n, "variant": None if v is None else v} for n, v in pair],
-            "refit_on": [f.name for f in flights], "held": held, "compared": by,
-            **({"S": "each load's standard deviation along model a's prediction of the "
-                     "reference 3211"} if by == "loads" else
-               {"R": "the baseline's joint fit (Eq. 11)"})}
+    d, info, pair = design_for(diag, flights, settings, say)
+    control = CONTROL[axis]
     written = write_discrimination(d, control, info, Path(args.out))
     ratio = d.to_json()["criterion"]["ratio"]
     print(f"fwid: input telling {pair[0][0]} from {pair[1][0]}: expected difference "
           f"{d.distance:.3g} (" + (f"{ratio:.2f}x a 3211's)" if ratio is not None else
                                    "a model's prediction of a 3211 diverges)"))
     used = d.limits["amplitude_used_rad"]
-    if used < args.amplitude:
+    if used < settings["amplitude"]:
         print(f"fwid: amplitude lowered to {used:.3g} rad: a model's prediction of a 3211 of "
               f"{2 * used:.3g} rad diverges (a model fitted on smaller manoeuvres)")
     print(f"fwid: {', '.join(written)} in {args.out}/")

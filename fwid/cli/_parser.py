@@ -207,6 +207,10 @@ def parser() -> argparse.ArgumentParser:
                         "fit (the process noise F it takes and its innovations' whiteness)")
     d.add_argument("--out", default=None,
                    help="folder for diagnosis.json and the figure (without it nothing is written)")
+    d.add_argument("--no-next-flight", action="store_true",
+                   help="with --out and an ambiguous confidence set: skip designing the flight "
+                        "that tells the two leading effects apart (next_flight.csv; both "
+                        "models re-fitted, then an optimisation: slow)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")
     d.add_argument("--window", default=None, metavar="START:END",
                    help="keep each flight's rows with START <= t <= END (seconds on its own t "
@@ -221,8 +225,10 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--from", dest="source", default=None, metavar="REPORT.json",
                    help="report.json of `fwid identify --model lon|lat`")
     g.add_argument("--duration", type=float, default=5.0, help="input length [s]")
-    g.add_argument("--amplitude", type=float, required=True,
-                   help="peak deflection [rad], perturbation from trim")
+    g.add_argument("--amplitude", type=float, default=None,
+                   help="peak deflection [rad], perturbation from trim (required, except with "
+                        "--discriminate, where without it the next flight `fwid diagnose --out` "
+                        "designed is designed again with its recorded settings)")
     g.add_argument("--quiet", type=float, default=1.0,
                    help="zero input for the first QUIET seconds (the trim estimate)")
     g.add_argument("--out", required=True, help="folder for input.csv, design.json, design.png")

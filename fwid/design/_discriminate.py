@@ -20,6 +20,14 @@ by both models stay finite: filling the window, else faster (units of T/14, T/28
 half the amplitude, and so on (`limits["amplitude_used_rad"]`,
 `limits["reference_3211_unit_s"]`). The comparison is the window-filling 3211 of the
 amplitude used; its `distance_3211` is `nan` when a model's prediction of it diverges.
+
+The free optimisation is one candidate among the classic inputs that tell amplitude from
+rate (`alternatives`): a state nonlinearity grows with the size of the manoeuvre, a servo's
+lag or rate limit with the speed of the control. The window-filling 3211 at the amplitude
+used and at half of it, a fast 3211 (unit T/28) and a fast doublet (unit T/14), each under
+the same attitude bound, are scored by the same `D`; the input returned is the one of them
+or the optimised one with the largest (`settings["chosen"]`, every one's `D` in
+`criterion["alternatives"]`).
 """
 
 from __future__ import annotations
@@ -38,7 +46,7 @@ from ..simulation._simulate import simulate
 from ._design import check_limits
 from ._optimise import _say, minimise
 from ._criterion import parametrisation as _parametrisation
-from ._signals import Grid, input_3211, step_index
+from ._signals import Grid, doublet, input_3211, step_index
 
 
 class Discrimination(eqx.Module):
@@ -59,6 +67,7 @@ class Discrimination(eqx.Module):
     limits: dict
     settings: dict
     criterion: str = "outputs"
+    alternatives: dict = eqx.field(default_factory=dict)
 
     def to_json(self) -> dict:
         name = ("expected difference of the two models' predicted outputs, sum_k d_k^T R^-1 "
@@ -68,7 +77,8 @@ class Discrimination(eqx.Module):
         return {"criterion": {"name": name,
                               "designed": self.distance, "3211": self.distance_3211,
                               "ratio": self.distance / max(self.distance_3211, 1e-300)
-                              if np.isfinite(self.distance_3211) else None},
+                              if np.isfinite(self.distance_3211) else None,
+                              "alternatives": self.alternatives},
                 "limits": self.limits, "settings": self.settings}
 
 
@@ -246,6 +256,13 @@ def design_discriminating(
                          progress=progress, label="discriminating design")
     u = np.asarray(bounded(signal(jnp.asarray(xs[int(np.argmin(fs))]))))
     D, ya, yb = distance(jnp.asarray(u))
+    chosen, scored = "optimised", {"optimised": float(D)}
+    for name, alt in alternatives(grid, used).items():
+        ua = np.asarray(bounded(jnp.asarray(alt)))
+        Da, yaa, yba = distance(jnp.asarray(ua))
+        scored[name] = float(Da) if np.isfinite(float(Da)) else None
+        if np.isfinite(float(Da)) and (not np.isfinite(float(D)) or float(Da) > float(D)):
+            chosen, u, D, ya, yb = name, ua, Da, yaa, yba
     if not np.isfinite(float(D)):
         raise InputError(f"design: the two models' predictions diverge for every input "
                          f"tried (peak {used:.3g} rad); lower the amplitude or give a smaller "
@@ -272,5 +289,14 @@ def design_discriminating(
                           distance_3211=float(D3), u_3211=u3211, limits=limits,
                           settings={"parametrisation": parametrisation, "rate_hz": rate,
                                     "restarts": restarts, "iterations": iterations,
-                                    "seed": seed},
-                          criterion="loads" if by_loads else "outputs")
+                                    "seed": seed, "chosen": chosen},
+                          criterion="loads" if by_loads else "outputs", alternatives=scored)
+
+
+def alternatives(grid: Grid, amplitude: float) -> dict[str, np.ndarray]:
+    """The classic inputs scored beside the optimised one (module docstring): amplitude
+    against rate."""
+    return {"3211": input_3211(grid, amplitude),
+            "3211 half amplitude": input_3211(grid, amplitude / 2),
+            "fast 3211": input_3211(grid, amplitude, grid.length / 28),
+            "fast doublet": doublet(grid, amplitude, grid.length / 14)}

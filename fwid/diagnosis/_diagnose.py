@@ -15,6 +15,7 @@ from ._augment import IN_EOM
 from ._campaign import Campaign, campaign
 from ._catalogue import CATALOGUE, Effect
 from ._confidence import LEVEL, as_rows, confidence_set, explanations, next_flight, sequential
+from ._detection import detection_limit
 from ._disturbance import RED_MIN, whitens
 from ._gapmap import gap_map
 from ._probes import PROBES
@@ -44,8 +45,10 @@ class Diagnosis:
     a candidate was or was not added), and the held-out load residuals before (`residuals`)
     and after each candidate or probe (`augmented[name]`), by test flight and load, for
     figures; `confidence_set` (the explanations the held-out blocks cannot tell from the
-    best, best first) and `states` (whether the states came from
-    `fwid reconstruct`)."""
+    best, best first), `states` (whether the states came from
+    `fwid reconstruct`), `detection` (the smallest gain these flights find with 80 % power
+    and how it falls with more flights, `_detection.py`) and `next_input` (the discriminating
+    input designed for an ambiguous set, merged into `next_flight`; `None` until designed)."""
 
     axis: str
     train: list[str]
@@ -69,6 +72,8 @@ class Diagnosis:
     confidence_set: list[dict] = dataclasses.field(default_factory=list)
     states: dict | None = None
     settings: dict = dataclasses.field(default_factory=dict)
+    detection: dict | None = None
+    next_input: dict | None = None
 
     def candidate(self, name: str) -> dict:
         """The catalogue candidate or probe `name`."""
@@ -80,7 +85,8 @@ class Diagnosis:
     @property
     def next_flight(self) -> dict | None:
         """`_confidence.next_flight` of the set: the flight that tells its rivals apart."""
-        return next_flight(self.confidence_set, [c["effect"] for c in self.candidates])
+        nxt = next_flight(self.confidence_set, [c["effect"] for c in self.candidates])
+        return None if nxt is None else {**nxt, **(self.next_input or {})}
 
     @property
     def lead(self) -> dict | None:
@@ -102,6 +108,7 @@ class Diagnosis:
             "candidates": self.candidates,
             "confidence_set": self.confidence_set,
             "next_flight": self.next_flight,
+            "detection": self.detection,
             "unexplained": self.unexplained,
             "probes": self.probes,
             "disturbance": self.disturbance,
@@ -276,6 +283,7 @@ def diagnose(
         confidence_set=kept,
         states=provenance([f.name for f in c.train + c.test], reconstruction),
         settings=_settings(c, alpha, min_gain),
+        detection=_detection(c, sel, min_gain),
     )
 
 
@@ -366,6 +374,15 @@ def verdict_of(effects: list[dict], unexplained: dict | None, disturbance: dict)
     red = (disturbance["redness"] >= RED_MIN or unexplained is not None
            or "leaves_red" in disturbance)
     return "random-disturbance" if red else "none"
+
+
+def _detection(c: Campaign, sel: Selection, min_gain: float) -> dict | None:
+    """`diagnosis.json`'s `detection`: the first round's limit and its flight-count rule."""
+    if not sel.rounds:
+        return None
+    lim = detection_limit(sel.first, [e.name for e in c.catalogue], sel.rounds[0][0],
+                          min_gain, len(c.train), len(c.test))
+    return None if lim is None else lim.as_dict()
 
 
 def _settings(c: Campaign, alpha: float, min_gain: float) -> dict:

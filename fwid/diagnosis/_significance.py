@@ -108,10 +108,7 @@ class Evidence:
         probability `POWER` (same block spread)."""
         if self.n < 2:
             return 1.0
-        df = self.n - 1
-        sd = float(np.std(self.d, ddof=1))
-        dmin = (stats.t.isf(level, df) + stats.t.isf(1.0 - POWER, df)) * sd / math.sqrt(self.n)
-        return 1.0 - math.exp(-dmin)
+        return 1.0 - math.exp(-power_limit(float(np.std(self.d, ddof=1)), self.n, level))
 
     def load_gain(self) -> dict:
         """Per load: relative drop of the held-out sum of squares."""
@@ -128,6 +125,20 @@ class Evidence:
             "detection_limit_pct": 100.0 * self.detection_limit(level),
             "load_gain_pct": {ld: 100.0 * g for ld, g in self.load_gain().items()},
         }
+
+
+def power_limit(sd: float, n: int, level: float, floor: float = 0.0) -> float:
+    """The true mean block score `d` that the test passes with probability `POWER`: `n`
+    blocks of spread `sd`, the one-sided t test at `level` and, with `floor > 0`, the mean
+    also at least `floor` (the selection's smallest gain, `-log(1 - MIN_GAIN)`). The
+    estimated mean is the true one plus `sd / sqrt(n)` times a t variate, so it exceeds
+    the larger of the two bars with probability `POWER` when the true mean is that bar plus
+    the `POWER` quantile of the t times the standard error. `inf` for fewer than 2 blocks."""
+    if n < 2:
+        return math.inf
+    df = n - 1
+    se = sd / math.sqrt(n)
+    return max(stats.t.isf(level, df) * se, floor) + stats.t.isf(1.0 - POWER, df) * se
 
 
 def evidence(engine: Engine, halves: list[Half], models: list[Model], effect: Effect) -> Evidence:

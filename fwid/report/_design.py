@@ -104,13 +104,19 @@ def _save_png(fig, path: Path) -> None:
     os.replace(tmp, path)
 
 
+def discrimination_csv(d, control: str) -> str:
+    """A discriminating input in the test-input format: `t` (s) and the control (rad,
+    perturbation from trim)."""
+    rows = ["t," + control] + [f"{t:.6f},{u:.10g}" for t, u in zip(d.t, d.u)]
+    return "\n".join(rows) + "\n"
+
+
 def write_discrimination(d, control: str, info: dict, out: Path) -> list[str]:
     """`input.csv`, `design.json` (the pair, the criterion, the limits, what was held at
     zero) and `design.png` of `fwid design --discriminate`."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    rows = ["t," + control] + [f"{t:.6f},{u:.10g}" for t, u in zip(d.t, d.u)]
-    write_text(out / "input.csv", "\n".join(rows) + "\n")
+    write_text(out / "input.csv", discrimination_csv(d, control))
     write_json(out / "design.json", {"discriminate": info, "control": control, **d.to_json()})
     names = tuple(p["effect"] for p in info["pair"])
     _save_png(plot_discrimination(d, control, names), out / "design.png")

@@ -111,9 +111,42 @@ def confidence_set_line(d: Diagnosis) -> str | None:
     nxt = d.next_flight
     if nxt is not None:
         a, b = nxt["tell_apart"]
-        line += (f"\n  to tell {a} from {b}, fly the input of `fwid design --discriminate` on "
-                 "this diagnosis's folder next")
+        where = nxt.get("input")
+        line += (f"\n  ambiguous between {a} and {b}: fly {where} next (the input designed on "
+                 "both fitted models to tell them apart, "
+                 f"{_discrimination_text(nxt)}), then diagnose again with it among the test "
+                 "flights" if where else
+                 f"\n  ambiguous between {a} and {b}: fly the input of `fwid design "
+                 "--discriminate` on this diagnosis's folder next"
+                 + (f" (not designed here: {nxt['failed']})" if nxt.get("failed") else ""))
     return line
+
+
+def _discrimination_text(nxt: dict) -> str:
+    """The designed input's expected difference against a 3211's, in words."""
+    c = nxt.get("criterion", {})
+    ratio = c.get("ratio")
+    return (f"expected difference {c.get('designed', float('nan')):.3g}, "
+            + (f"{ratio:.2f}x a 3211's" if ratio is not None else "a 3211's diverges"))
+
+
+def detection_line(d: Diagnosis) -> str | None:
+    """The smallest gain these flights find with 80 % power and the flights a 3 % and a 5 %
+    gain need (`diagnosis.json`'s `detection`); `None` without the block."""
+    det = d.detection
+    if det is None:
+        return None
+    n = det["flights"]
+    need = [(g, m) for g, m in det["flights_for"].items() if m is not None]
+    never = [g for g, m in det["flights_for"].items() if m is None]
+    return (f"  detection: the smallest gain these {n} flights ({det['train_flights']} training"
+            f" + {det['test_flights']} test, all scored by the cross-fit) detect with "
+            f"{100 * det['power']:.0f} % power: {det['limit_pct']:.1f} %; "
+            + "; ".join(f"a {g} % gain needs {m} flights" for g, m in need)
+            + (f"; a {' or '.join(never)} % gain: never (at most the "
+               f"{det['min_gain_pct']:g} % that counts)" if never else "")
+            + " (flights of this kind; the limit falls like 1/sqrt(flights) down to "
+            f"{det['min_gain_pct']:g} %)")
 
 
 def _manoeuvre_text(tm: dict) -> str:
@@ -213,6 +246,9 @@ def diagnosis_summary(d: Diagnosis) -> str:
                          "more of the held-out error but leaves it "
                          f"{_as_red(red['redness_after'], d.disturbance)}: it tracks what gusts "
                          "or process noise did to the states, so it is not named")
+    det = detection_line(d)
+    if det:
+        lines.append(det)
     st = provenance_text(d.states)
     if st:
         lines.append(f"  states: {st}")

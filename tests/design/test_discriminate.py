@@ -97,3 +97,30 @@ def test_the_loads_criterion_compares_the_loads_along_either_trajectory():
     # the load difference is 0.2 u, mean removed: the best input swings between the limits
     assert d.distance >= d.distance_3211 > 0
     assert np.mean(np.abs(d.u[d.t > 1.0])) > 0.8 * 0.5
+
+
+def test_a_classic_input_that_tells_them_apart_better_is_chosen():
+    """Models differing only in the lag of the control (a servo): with the optimisation cut
+    to one step of a random multisine, a classic input wins; the input returned is that
+    signal and its D the largest scored."""
+    def lagged(tau):
+        def f(x, u, p, c):
+            return jnp.stack([-2.0 * x[0] + x[1], (u[0] - x[1]) / p["tau"]])
+        return fwid.GreyBoxModel(f, states=("x", "s"), inputs=("u",), params={"tau": tau})
+
+    ma, mb = lagged(0.02), lagged(0.15)
+    d = fwid.design_discriminating(ma, mb, consts={}, R=np.diag([1e-4, 1e-4]), amplitude=0.3,
+                                   duration=4.0, quiet=1.0, rate=50.0, attitude_bound=None,
+                                   restarts=1, iterations=1, parametrisation="multisine")
+    alt = d.to_json()["criterion"]["alternatives"]
+    assert set(alt) == {"optimised", "3211", "3211 half amplitude", "fast 3211", "fast doublet"}
+    chosen = d.settings["chosen"]
+    assert d.distance == pytest.approx(max(v for v in alt.values() if v is not None))
+    assert alt[chosen] == pytest.approx(d.distance)
+    assert chosen != "optimised" and alt["optimised"] < d.distance
+    # linear models: half the amplitude, a quarter of D
+    assert alt["3211 half amplitude"] == pytest.approx(alt["3211"] / 4, rel=1e-6)
+    from fwid.design._discriminate import alternatives
+    from fwid.design._signals import Grid
+
+    np.testing.assert_allclose(d.u, alternatives(Grid(4.0, 1.0, 50.0), 0.3)[chosen])

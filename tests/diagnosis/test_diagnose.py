@@ -165,6 +165,15 @@ def test_report_follows_the_contract(effect_flights):
             assert (name == r["added"]) <= (c["p"] < r["level"]), (name, c)
     assert rounds[0]["candidates"]["flap-coupling"]["p"] == pytest.approx(
         rep["first_round"]["flap-coupling"]["p"])
+    # the detection limit: these flights, the first round's level, its flight-count rule
+    det = rep["detection"]
+    assert det["flights"] == len(rep["train"]) + len(rep["test"]) and det["power"] == 0.8
+    assert det["level"] == pytest.approx(rounds[0]["level"])
+    assert det["blocks"] == len(d.folds)
+    assert det["min_gain_pct"] < det["limit_pct"] < 100.0
+    assert det["flights_for"]["1"] is None and det["flights_for"]["2"] is None
+    m5 = det["flights_for"]["5"]
+    assert (m5 <= det["flights"]) == (det["limit_pct"] <= 5.0)
     loc = rep["localisation"]
     assert {"by_output", "by_band", "by_time", "by_state"} <= set(loc)
     for ld, bands in loc["by_band"].items():

@@ -170,3 +170,32 @@ def test_subset_groups_take_a_case_in_any_group():
     got = dp.select(cases, ["kind=single", "strength=1.0", "|", "kind=clean"], None)
     assert got == [cases[0], cases[3]]
     assert dp.select(cases, ["effect=b"], None) == [cases[2]]
+
+
+def test_weak_cases_get_fwids_flight_count_and_the_promise_is_counted():
+    from _power_summary import truth_gain_table
+    from fwid.diagnosis._detection import DetectionLimit
+
+    det = DetectionLimit(sd=0.08, blocks=40, flights=8, train=4, test=4, level=0.05 / 12,
+                         min_gain=0.02).as_dict()
+
+    def rec(effect, gain, verdict, seed):
+        r = {"kind": "single", "effect": effect, "form": "f", "strength": 1.0, "n": 4,
+             "seed": seed, "verdict": verdict, "effects": [verdict],
+             "first_round": {effect: {"gain_pct": gain, "p": 0.01, "t": 3.0}},
+             "detection": det}
+        dp.truth_gain(r)
+        return r
+
+    rows = [rec("nonlinear-aero", 9.0, "nonlinear-aero", 0),
+            rec("unsteady-aero", 3.0, "none", 1), rec("time-offset", 1.5, "none", 2)]
+    assert rows[0]["truth_gain_pct"] == 9.0 and "flights_for_truth" not in rows[0]
+    assert rows[1]["flights_for_truth"] == det["flights_for"]["3"] >= 8
+    assert rows[2]["flights_for_truth"] is None  # below the 2 % that counts: never
+    promised = [{"effect": "unsteady-aero", "form": "f", "strength": 1.0, "n": 4, "seed": 1,
+                 "found": True, "verdict": "unsteady-aero"}]
+    text = "\n".join(truth_gain_table(rows, promised))
+    assert "| >= 4 % | 1 | 1/1 |" in text and "| < 4 % | 2 | 0/2 |" in text
+    assert f"| unsteady-aero | f | 4+4 | 3.00 | {det['flights_for']['3']} | yes |" in text
+    assert "| time-offset | f | 4+4 | 1.50 | never | - |" in text
+    assert "The promise (named at fwid's flight count, target >= 80 %): 1/1 (100 %)" in text
