@@ -1,4 +1,4 @@
-"""Withheld-effect benchmark of `fwid.diagnose` (issue 5).
+"""Withheld-effect benchmark of `fwid.diagnose`.
 
 For each axis, effect (the catalogue, `none`, and `turbulence`, which is outside the
 catalogue), strength and seed: simulate 8 training and 8 test flights with the effect, delete

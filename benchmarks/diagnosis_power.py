@@ -1,11 +1,12 @@
-"""Power of `fwid.diagnose` on a randomised benchmark that cannot be passed by tuning (issue 12).
+"""Power of `fwid.diagnose` on a randomised benchmark that cannot be passed by tuning.
 
 Cases (built deterministically by `cases(half)`):
 
 - every catalogue effect x form x strength {0.25, 0.5, 1, 2} x flights {4+4, 6+6, 8+8};
 - clean flights (`none`, 4 per flight count) and the out-of-catalogue effects (`turbulence`,
-  `cg-offset`, `battery-sag`; until issue 16 `unsteady-aero` and `sensor-offset`, now in the
-  catalogue as `unsteady-aero` and `time-offset`) at strengths {1, 2} x flight counts: the
+  `cg-offset`, `battery-sag`; `unsteady-aero` and `sensor-offset` were here before they
+  joined the catalogue as `unsteady-aero` and `time-offset`) at strengths {1, 2} x flight
+  counts: the
   right verdict names no catalogue entry;
 - every pair of catalogue effects at strength 1 with 6+6 flights, forms drawn from the half:
   both should be in the result's `effects`.

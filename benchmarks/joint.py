@@ -1,4 +1,4 @@
-"""Joint or individual fits: which validates better on held-out flights (issue 4, item 2).
+"""Joint or individual fits: which validates better on held-out flights.
 
     python benchmarks/joint.py [--seeds 3] [--train 6] [--test 6] [--durations 2.5 4.5]
                                [--axes lon lat] [--out benchmarks/results/joint.json]

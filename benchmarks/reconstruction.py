@@ -1,4 +1,4 @@
-"""How well and how fast `fwid reconstruct` turns raw recordings into flight data (issue 32):
+"""How well and how fast `fwid reconstruct` turns raw recordings into flight data:
 the error against the simulator's exact states and loads, per band, and the whole process
 on 16 takes of 60 s; beside it, what a Python user writes instead (`peers/finite_differences.py`).
 
@@ -17,7 +17,7 @@ TEXT (e.g. `--only "90 s" --no-speed`) and writes a results file only where `--o
 **Errors** (`error`): over the overlap of take and log less 0.5 s at each end, against
 `truth/NAME.csv` on the same frames. Cycle-averaged (`ca`): both low-passed at 5 Hz
 (`fwid.decomposition.lowpass`, the paper's split), RMS error in % of the truth's excursion
-(max - min) -- the issue's acceptance measure. Flapping harmonic n (`h1 h2 h3`): both
+(max - min) -- the acceptance measure. Flapping harmonic n (`h1 h2 h3`): both
 band-passed to `(n -+ 1/2) f` (differences of two 8th-order `lowpass`, `f` the mean flapping
 frequency), RMS error in % of the truth's RMS in the band. Medians over the takes of a case.
 `clock_ms`: the largest |estimated - true| clock offset [ms].

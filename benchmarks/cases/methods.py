@@ -1,5 +1,5 @@
-"""The textbook cases of `textbook_cases.py` that need a method other than plain output error
-(issue 17): ``tc08`` (multiple shooting), ``tc04_fem``, ``tc02_fem`` (filter error) and the
+"""The textbook cases of `textbook_cases.py` that need a method other than plain output error:
+``tc08`` (multiple shooting), ``tc04_fem``, ``tc02_fem`` (filter error) and the
 speed row ``speed_fem_vs_oem``. Each runner returns the case's entry of the JSON file:
 ``{param: {"value": .., "std": ..}, "_fwid": {...}}``."""
 

@@ -12,7 +12,7 @@ R. V. Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., AIAA 2015, c
 Data: ``unStabAC_sim.asc`` (simulated, no process noise; 251 samples at 0.05 s), x0 = 0
 (fixed, as the book). Start values: the book's (``param`` of ``mDefCase08``); Zq is fixed
 at its start value -1.4768, as the book does (``parFlag``). ``TRUE``: the
-values the data were simulated with (issue 17); the eigenvalues they give are -5.825 and
+values the data were simulated with; the eigenvalues they give are -5.825 and
 +0.693 1/s. Plain output error diverges from the unstable start and ends at a stable model
 (the book's known wrong answer); `fwid.fit(..., method="multiple-shooting")` reaches the truth.
 """
@@ -65,5 +65,5 @@ CASE = Case(
     key="tc08", title="FVSysID TC08: unstable aircraft, short period, 3 outputs",
     names=NAMES, theta0=THETA0, states=("w", "q"), inputs=("de",),
     outputs=("az", "w", "q"), xdot=xdot, obs=obs, records=records, files=(FILE,),
-    published=TRUE, source="the values the data were simulated with (issue 17)", free=FREE,
+    published=TRUE, source="the values the data were simulated with", free=FREE,
 )

@@ -6,7 +6,7 @@ perturbations from trim, each flight's own constant (and, for the flapping part,
 3-harmonic series, Eq. 12) taken out, and the linear model of Eqs. (2-6) (the axis's states and
 control) always in the model, never thresholded.
 
-A generic library of the catalogue's families (CONTRACTS section 4 and the README's table),
+A generic library of the catalogue's families (the README's verdict table),
 each column labelled with its family:
 
 - `nonlinear-aero`: the monomials of degree 2 and 3 of the axis's cycle-averaged states

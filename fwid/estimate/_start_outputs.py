@@ -1,4 +1,4 @@
-"""Start values for models with an output equation `h` (issue 13).
+"""Start values for models with an output equation `h`.
 
 When every state is also measured (an output of the same name, e.g. the states p, r among
 the outputs pdot, rdot, ay, p, r), [`output_equation_start`][] estimates the free

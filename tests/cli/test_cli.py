@@ -1,4 +1,4 @@
-"""The command line per CONTRACTS section 2: exit codes, messages, report.json."""
+"""The command line per docs/reference/formats.md: exit codes, messages, report.json."""
 
 import json
 from pathlib import Path
@@ -148,7 +148,7 @@ def test_diagnose_writes_contract_report_and_summary(tmp_path, capsys):
         assert main(["simulate", str(folder), "--flights", "8", "--seed", str(seed),
                      "--effect", "nonlinear-aero", "--strength", "1.5"]) == 0
     capsys.readouterr()
-    # the training flights come from fwid reconstruct (CONTRACTS section 5), the test ones not
+    # the training flights come from fwid reconstruct (docs/reference/formats.md), the test ones not
     (train / "reconstruction.json").write_text(json.dumps({"flights": [
         {"flight": p.name, "source": "motive", "clock_offset_s": -2.0, "dropouts": [],
          "warnings": []} for p in sorted(train.glob("*.csv"))]}))

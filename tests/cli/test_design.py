@@ -1,4 +1,4 @@
-"""`fwid design` (CONTRACTS section 6): the files and their columns, the one-line errors."""
+"""`fwid design` (docs/reference/formats.md): the files and their columns, the one-line errors."""
 
 import csv
 import json

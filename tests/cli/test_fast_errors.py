@@ -1,6 +1,6 @@
-"""Bad input to `fwid identify` and `fwid diagnose` is answered before JAX is imported
-(issue 14): every file is read and checked with numpy first, the one-line message and exit
-code 2 as before."""
+"""Bad input to `fwid identify` and `fwid diagnose` is answered before JAX is imported:
+every file is read and checked with numpy first, the one-line message and exit code 2 as
+before."""
 
 import json
 import subprocess

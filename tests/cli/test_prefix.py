@@ -1,5 +1,5 @@
 """`fwid simulate --prefix`: training and test sets written into one folder by separate
-calls never collide (issue 15)."""
+calls never collide."""
 
 import pytest
 

@@ -1,4 +1,4 @@
-"""`fwid simulate --raw fwid|motive` (CONTRACTS section 5): the files of each form, the raw
+"""`fwid simulate --raw fwid|motive` (docs/reference/formats.md): the files of each form, the raw
 options passed on, and bad raw options refused with exit 2 and nothing written."""
 
 import json

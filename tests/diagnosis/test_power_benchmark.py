@@ -1,5 +1,5 @@
 """A fast slice of `benchmarks/diagnosis_power.py`: its split cannot leak, its cases run blind
-through `fwid diagnose`, and its summary counts them (issue 12)."""
+through `fwid diagnose`, and its summary counts them."""
 
 import json
 import sys
@@ -144,7 +144,7 @@ def test_the_summary_shows_the_peer_beside_fwid(tmp_path):
 
 
 def test_pairs_are_also_scored_against_issue_12s_catalogue():
-    """Pairs of CONTRACTS' four need both named; with `unsteady-aero` (outside issue 12's
+    """Pairs of the original four need both named; with `unsteady-aero` (outside the original
     catalogue) the other effect must be named; the extended pairs count both."""
     def rec(effect, effects):
         return {"kind": "pair", "effect": effect, "effects": effects, "verdict": effects[0]}
@@ -156,7 +156,7 @@ def test_pairs_are_also_scored_against_issue_12s_catalogue():
             rec("actuator-dynamics+unsteady-aero", ["unsteady-aero"]),
             rec("unsteady-aero+lon-lat-coupling", ["lon-lat-coupling", "unsteady-aero"])]
     text = "\n".join(catalogue_pairs(rows))
-    assert "CONTRACTS' four effects, both named: 1/2;" in text
+    assert "the original four effects, both named: 1/2;" in text
     assert "without `unsteady-aero`, both named: 2/3;" in text
     assert "the other effect named: 2/3 (both: 1);" in text
     assert "all pairs so scored: 4/6." in text

@@ -1,4 +1,4 @@
-"""The batched estimator kept whole on disk (`jax.export`, issue 14): the same estimates
+"""The batched estimator kept whole on disk (`jax.export`): the same estimates
 whether traced, kept or read back; a program is kept only under a key that describes it; a
 user's model is traced as before.
 

@@ -1,4 +1,4 @@
-"""No silent failure on the textbook cases output error cannot do well (issue 13).
+"""No silent failure on the textbook cases output error cannot do well.
 
 FVSysID test case 8 (an unstable aircraft, `unStabAC_sim.asc`, benchmarks/tc08.py) and test
 case 2 (lateral motion simulated with turbulence, `y13aus_da1.asc`, benchmarks/tc02.py),

@@ -239,7 +239,7 @@ def test_blow_up_start_recovers_or_raises_diverged(lon_flight):
 
 def test_fit_each_identical_to_fitting_each_flight_alone(lon_flight):
     """The vmapped estimator freezes a flight once it has converged: the batched estimates
-    are those of fwid.fit on each flight alone (issue 4: 1e-9 relative)."""
+    are those of fwid.fit on each flight alone (1e-9 relative)."""
     exps = [lon_flight.experiment(lon_flight.ys + _white(lon_flight, seed=s)) for s in (1, 2, 3)]
     batched = fwid.fit_each(longitudinal(), exps)
     for e, b in zip(exps, batched):

@@ -1,4 +1,4 @@
-"""The least-squares start of every flight in one batched, compiled call (issue 14): the
+"""The least-squares start of every flight in one batched, compiled call: the
 start values of `least_squares_start` on each flight alone, to 1e-9, whatever the flights'
 lengths (padding) and whether they carry the forces, compiled once for the batch."""
 

@@ -1,4 +1,4 @@
-"""fwid's defaults reproduce the textbook output-error cases (issue 13).
+"""fwid's defaults reproduce the textbook output-error cases.
 
 FVSysID test cases 1 and 4 and SIDPAC's Twin Otter `tlonss` demo (benchmarks/tc01.py,
 tc04.py, twin_otter.py), fitted with `fwid.fit` and its DEFAULT settings, against the

@@ -53,8 +53,8 @@ def other_length(tmp_path_factory):
 
 def test_new_length_in_a_bucket_compiles_no_estimator(flights, other_length, caplog):
     """Flights of a new length, padded to the length of the flights before: the start, the
-    estimator and the simulation of the validation flight are not compiled again (issue 14;
-    only small programs for the data, e.g. the filters, are)."""
+    estimator and the simulation of the validation flight are not compiled again (only
+    small programs for the data, e.g. the filters, are)."""
     from fwid.simulation import averaged, bucket_length
 
     def run(fl):

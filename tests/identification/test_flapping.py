@@ -230,7 +230,7 @@ def _canned_identify(flights, axis, *, joint=False, cutoff=5.0, progress=False):
 
 
 def test_combined_cli(data, tmp_path, monkeypatch):
-    """`fwid identify --model combined`: the report (CONTRACTS section 3) and Figures 12,
+    """`fwid identify --model combined`: the report (docs/reference/formats.md) and Figures 12,
     15-17 (the cycle-averaged estimator stubbed out, see above)."""
     from fwid.identification import _combined as pipeline
 

@@ -1,5 +1,5 @@
 """Several flights through `fwid identify`: one fit per flight (batched), the joint fit, and
-the joint-vs-individual comparison on held-out flights (issue 4, items 1 and 2)."""
+the joint-vs-individual comparison on held-out flights."""
 
 import contextlib
 import io
@@ -48,7 +48,7 @@ def _true_wn():
 
 
 def test_per_flight_fits_and_their_spread(each):
-    """Without --joint: one fit per flight (CONTRACTS: per_flight), the top level their mean,
+    """Without --joint: one fit per flight (per_flight), the top level their mean,
     and the modes' spread over the flights (Figures 8 and 11)."""
     per = each["per_flight"]
     assert [p["flight"] for p in per] == ["lon_0.csv", "lon_1.csv", "lon_2.csv"]
@@ -183,7 +183,7 @@ def _check(rows: dict, spread: dict):
 
 def test_spread_of_individual_fits_printed(each):
     """Several flights fitted one by one: the terminal shows the modes' spread, with the
-    numbers of report.json (issue 15)."""
+    numbers of report.json."""
     spread = each["modes_spread"]
     assert spread["flights"] == 3
     _check(_rows(each["_terminal"], "mode spread over 3 flights (each fitted alone):"), spread)

@@ -1,4 +1,4 @@
-"""Padded lengths (issue 14): a few lengths per octave, and padding that changes no result."""
+"""Padded lengths: a few lengths per octave, and padding that changes no result."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Raw recordings of the 6-DOF flights (CONTRACTS section 5): the files parse back as
+"""Raw recordings of the 6-DOF flights (docs/reference/formats.md): the files parse back as
 RAWFORMS lays them out, the y-up frame maps back to north-east-down, and the pose noise,
 dropout share and autopilot clock are as asked. The parsing here is written independently
 of the writer (scipy's Rotation for the attitude)."""

@@ -1,4 +1,4 @@
-"""Writing flights to disk per CONTRACTS section 1."""
+"""Writing flights to disk per docs/reference/formats.md."""
 
 import json
 

@@ -25,7 +25,7 @@ dynamics, is exactly the flight without the effect):
   `dz(e) = sign(e) max(|e| - b, 0)` (it holds on a reversal until the command has crossed the
   band: hysteresis), `b = s b1` per surface (`play_de`, `play_dr` [rad]), `tau = s tau1`.
 
-`time-offset` (in the catalogue since issue 16; `sensor-offset` is an alias): the true
+`time-offset` (`sensor-offset` is an alias): the true
 deflection acts at once, but the logged control columns `de`, `dr` (the whole measured
 column, ripple included) are late against the states. So the response seems to LEAD the
 measured input: the opposite sign of an actuator delay, which no causal actuator model can

@@ -24,7 +24,7 @@ on Y L N), so a flight of either axis shows it. `s` is the strength.
   (`w0`, `v0` [m/s]) a fraction `W` of the incidence's load goes missing: the extra load
   `-Fx W max(x - x0, 0)` for x = dw, dv (`s lon`, `s lat`).
 
-`unsteady-aero` (in the catalogue since issue 16): part of the state-dependent
+`unsteady-aero`: part of the state-dependent
 cycle-averaged aerodynamic loads (Eqs. 1-6) follows the states late (a lagging wake). `W`
 is the lagging fraction (`s wlon` on the lon states q u w, `s wlat` on p r v: the lateral
 one smaller because the fast roll mode makes any lag there much stronger); `xl` the lagged

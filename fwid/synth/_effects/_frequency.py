@@ -1,4 +1,4 @@
-"""Forms of `flap-frequency` (in the catalogue since issue 16): the cycle-averaged loads
+"""Forms of `flap-frequency`: the cycle-averaged loads
 follow the slow variation of the flapping frequency `f` (which the paper's model uses only
 for the phase of Eq. 12). The flights' true frequency wanders by about 0.1 Hz about its
 nominal `f0` (`_simulate.FlapFrequency`); `df = f - f0`, `s` is the strength:
