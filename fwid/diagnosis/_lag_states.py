@@ -9,9 +9,12 @@ design) has no measured states: each filter stage becomes a state `z_lk` per loa
 
     dz_lk/dt = (qs_l(x) - z_lk) / tau_k,    qs_l(x) = sum_s g_ls x_s,
 
-started steady (`z = qs`), and the term `sum_k share_k z_lk - qs_l` enters the load through
-its fitted coefficient exactly where the prepared input did (one stage for a first-order
-lag, two for the indicial form; a pure delay has no finite state and is refused). The
+started steady (`z = qs`), and the term `sum_k share_k z_lk + direct qs_l - qs_l` enters the
+load through its fitted coefficient exactly where the prepared input did (one stage for a
+first-order lag, two for the indicial form). A pure delay `T` has no finite state: it is
+taken as its first-order Pade approximant `(1 - sT/2) / (1 + sT/2) = 2 / (1 + sT/2) - 1`, one
+stage of `T/2` with share 2 and direct part -1 (an all-pass filter: the delay's gain, its
+phase within 0.08 rad up to `1 / T` rad/s), enough for a design to tell it from its rivals. The
 outputs stay those of the model with inputs (the extra states are not outputs), so both
 models of a discriminating pair compare the same outputs.
 
@@ -32,21 +35,25 @@ from ._catalogue.unsteady_aero import WAGNER_RATIO, WAGNER_SHARES, Lagging
 from ._signals import AXIS_LOADS
 
 
-def stages(member: Lagging) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The filter's first-order stages: their time constants and shares."""
+def stages(member: Lagging) -> tuple[tuple[float, ...], tuple[float, ...], float]:
+    """The filter's first-order stages, their time constants and shares, and its direct part
+    (the share of the input passed through: a delay's Pade approximant's -1; module
+    docstring)."""
     if member.kind == "lag":
-        return (member.tau,), (1.0,)
+        return (member.tau,), (1.0,), 0.0
     if member.kind == "indicial":
-        return (member.tau, WAGNER_RATIO * member.tau), WAGNER_SHARES
-    raise ValueError(f"lag_states: a {member.text()} has no finite state form; the design "
-                     "needs a lag or the indicial form")
+        return (member.tau, WAGNER_RATIO * member.tau), WAGNER_SHARES, 0.0
+    if member.kind == "delay":
+        return (member.tau / 2.0,), (2.0,), -1.0
+    raise ValueError(f"lag_states: a {member.text()} has no state form")
 
 
 class _Internal(eqx.Module):
     """`fn(x, u, p, c)` of the model with inputs (its state equation `rates=True`, output
     equation or force model `rates=False`), evaluated on the first `n` states, with the
     model's inputs rebuilt: the remaining ones from `u` (at `keep`), the lag inputs (at
-    `slots`) as `sum_k shares_k z_jk - qs_j(x)` with `qs_j = weights_j . x`; with `rates`, the
+    `slots`) as `sum_k shares_k z_jk + (direct - 1) qs_j(x)` with `qs_j = weights_j . x`;
+    with `rates`, the
     lag states' rates appended (slot-major: slot `j`'s stages are together)."""
 
     fn: Callable | None = eqx.field(static=True)  # None: the identity output
@@ -57,6 +64,7 @@ class _Internal(eqx.Module):
     taus: tuple[float, ...] = eqx.field(static=True)
     shares: tuple[float, ...] = eqx.field(static=True)
     rates: bool = eqx.field(static=True)
+    direct: float = eqx.field(static=True, default=0.0)
 
     def __call__(self, x, u, p, c):
         xs = x[: self.n]
@@ -69,7 +77,7 @@ class _Internal(eqx.Module):
         if self.keep:
             full = full.at[np.asarray(self.keep, dtype=int)].set(u)
         full = full.at[np.asarray(self.slots, dtype=int)].set(
-            z @ jnp.asarray(self.shares) - qs)
+            z @ jnp.asarray(self.shares) + (self.direct - 1.0) * qs)
         out = self.fn(xs, full, p, c)
         if not self.rates:
             return out
@@ -84,13 +92,14 @@ def lag_states(model: GreyBoxModel, axis: str, member: Lagging) -> GreyBoxModel:
     - `model`: the augmented model; its inputs `X_lag`, ... are the lagging parts of the
       quasi-steady loads (`member.derivatives`) through `member`'s filter.
     - `axis`: `"lon"` or `"lat"`.
-    - `member`: the diagnosed filter (`Lagging`, a lag or the indicial form).
+    - `member`: the diagnosed filter (`Lagging`: a lag, the indicial form, or a delay as its
+      Pade approximant).
 
     **Returns:** a [`fwid.GreyBoxModel`][] with the states `model.states` then the lag states
     (`{load}_lag{k}`: start them at the quasi-steady load, e.g. zero at trim), the inputs
     `model`'s other inputs, the same parameters, outputs and force names.
     """
-    taus, shares = stages(member)
+    taus, shares, direct = stages(member)
     loads = [ld for ld in AXIS_LOADS[axis] if f"{ld}_lag" in model.inputs]
     if not loads:
         raise ValueError(f"lag_states: {model.name} has no lag inputs "
@@ -102,7 +111,7 @@ def lag_states(model: GreyBoxModel, axis: str, member: Lagging) -> GreyBoxModel:
                           for s in model.states) for ld in loads)
 
     def wrap(fn, rates):
-        return _Internal(fn, n, weights, slots, keep, tuple(taus), tuple(shares), rates)
+        return _Internal(fn, n, weights, slots, keep, tuple(taus), tuple(shares), rates, direct)
 
     return GreyBoxModel(
         wrap(model.f, True), states=model.states + tuple(

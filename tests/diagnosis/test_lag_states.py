@@ -115,3 +115,23 @@ def test_the_loads_along_a_trajectory_are_the_input_lag_models_loads(setup):
     want = loads(lagp)
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12 * np.max(np.abs(want)))
     assert np.max(np.abs(want - loads(0 * lagp))) > 1e-3 * np.max(np.abs(want))
+
+
+def test_a_delay_takes_its_pade_form(setup):
+    """A delay has no finite state: its first-order Pade form simulates the outputs the
+    input-lag model gives fed the delayed quasi-steady loads of those outputs, within a few
+    per cent (an all-pass approximant, not the delay)."""
+    model, _, consts, _, lag = setup
+    member = Lagging("delay", 0.05, lag.derivatives)
+    inner = lag_states(model, "lon", member)
+    assert inner.states[4:] == ("X_lag1", "Z_lag1", "M_lag1")
+    grid = Grid(4.0, 1.0, 200.0)
+    t, de = grid.t, input_3211(grid, 0.12)
+    _, ys = _simulate(inner, t, de[:, None], consts)
+    lagp = _lagp(model, member, ys, t[1] - t[0])
+    _, y_in = _simulate(model, t, np.column_stack([de, lagp]), consts)
+    scale = np.max(np.abs(ys), axis=0)
+    err = np.max(np.abs(ys - y_in), axis=0) / scale
+    assert np.all(err < 0.02), err
+    _, y_held = _simulate(model, t, np.column_stack([de, 0 * lagp]), consts)
+    assert np.all(np.max(np.abs(ys - y_held), axis=0) > 5 * err * scale)
