@@ -1,5 +1,5 @@
 """The diagnosis on raw tracking flights, end to end as a user runs it: `fwid simulate --raw`,
-`fwid reconstruct`, `fwid diagnose` (issue: a lagging actuator is named, a clean set is `none`).
+`fwid reconstruct`, `fwid diagnose` (target: a lagging actuator is named, a clean set is `none`).
 
 Per seed, form (`motive`: a Motive export with its autopilot log and gyro; `fwid`: the fwid raw
 CSV, no gyro) and effect (`none`, `actuator-dynamics`), 6 training flights (seed `s`) and 6

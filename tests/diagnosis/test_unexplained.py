@@ -109,8 +109,8 @@ def test_a_failed_filter_error_fit_is_recorded_not_raised(effect_flights, monkey
 
 def test_a_control_log_that_trails_is_a_time_offset_not_actuator_dynamics(effect_flights):
     """The deflection acts before it is logged (a clock offset between the logs): the
-    catalogue's actuator entry only lets it act after, so the answer is `time-offset` (issue
-    16), whose lead is the one injected, never `actuator-dynamics`."""
+    catalogue's actuator entry only lets it act after, so the answer is `time-offset`,
+    whose lead is the one injected, never `actuator-dynamics`."""
     from fwid.synth import Effect
 
     d = fwid.diagnose(*_load(*effect_flights("time-offset", strength=1.0, seed=2)),
