@@ -261,19 +261,19 @@ class Engine:
                      for ch in chans) for v in effect.variants]
         return effect.variants[simplest_best(costs)]
 
-    def lowers(self, idx, model: Model, effect: Effect, channel) -> bool:
+    def lowers(self, idx, model: Model, effect: Effect, channel, variant=None) -> bool:
         """Does `effect` (added to `model`) lower the leave-one-unit-out error of `channel`
-        over the units `idx`? For a family whose members differ in size (`Effect.sized`),
-        by the one-standard-error rule with the model without it as the family's empty
-        member (`one_standard_error`): the least of many members' leave-one-out errors is
-        biased low, so a member must beat the model without it by more than the noise of
-        that comparison, and a larger one by more than a smaller; otherwise its one
-        variant's error below the model's."""
+        over the units `idx`? With `variant`, that member's error below the model's. Else,
+        for a family whose members differ in size (`Effect.sized`), by the
+        one-standard-error rule with the model without it as the family's empty member
+        (`one_standard_error`): the least of many members' leave-one-out errors is biased
+        low, so a member must beat the model without it by more than the noise of that
+        comparison, and a larger one by more than a smaller."""
         base = self.loo_errors(idx, channel, model)
-        if not effect.sized:
-            v = effect.variants[0] if len(effect.variants) == 1 else None
-            return float(np.sum(self.loo_errors(idx, channel, model + ((effect, v),))[0])) \
-                < float(np.sum(base[0]))
+        if variant is not None or not effect.sized:
+            v = variant if variant is not None else effect.variants[0]
+            return (float(np.sum(self.loo_errors(idx, channel, model + ((effect, v),))[0]))
+                    < float(np.sum(base[0])))
         loo = [self.loo_errors(idx, channel, model + ((effect, v),)) for v in effect.variants]
         return one_standard_error([base[0]] + [e for e, _ in loo],
                                   [base[1]] + [k + numbers_of(v) for (_, k), v
@@ -285,22 +285,33 @@ class Engine:
         fitted on the others, its local terms its own) it lowers (`lowers`). No threshold
         beyond the noise of that comparison: a column set that only fits noise raises that
         error. Every load for an effect that replaces the deflection, or with fewer than
-        three units. Only the loads it is `allowed` on. The variant: `best_variant` on
-        those loads, so a family's member is the one that explains what the family was
-        found to act on, not the noise of the loads it does not touch (with no load, the
-        member over every allowed load: it acts on none)."""
+        three units. Only the loads it is `allowed` on. The variant (`best_variant`): for a
+        family whose members differ in size, chosen on those loads only, among the members
+        that lower the error of each of them (`on_loads`), so the member explains what the
+        family was found to act on, not the noise of the loads it does not touch."""
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
         every = tuple(ld for ld, _ in chans)
         if len(idx) < 3 or effect.replaces_input:
             return OnLoads(self.best_variant(idx, model, effect, sigma2), every)
         if not effect.sized:
             v = self.best_variant(idx, model, effect, sigma2)
-            loads = tuple(ch[0] for ch in chans
-                          if self.loo_error(idx, ch, model + ((effect, OnLoads(v, every)),))
-                          < self.loo_error(idx, ch, model))
-            return OnLoads(v, loads)
+            return OnLoads(v, tuple(ch[0] for ch in chans
+                                    if self.lowers(idx, model, effect, ch, OnLoads(v, every))))
         loads = tuple(ch[0] for ch in chans if self.lowers(idx, model, effect, ch))
-        return OnLoads(self.best_variant(idx, model, effect, sigma2, loads or None), loads)
+        return self.on_loads(idx, model, effect, sigma2, loads)
+
+    def on_loads(self, idx, model: Model, effect: Effect, sigma2: dict, loads) -> OnLoads:
+        """`effect` acting on `loads`, its member (`best_variant` on those loads) among those
+        that lower the leave-one-unit-out error over the units `idx` of each of them
+        (`lowers`; all members when none does). With no load, it acts on none (the member
+        over every load it is allowed on, for the record)."""
+        if not loads:
+            return OnLoads(self.best_variant(idx, model, effect, sigma2), ())
+        fits = tuple(v for v in effect.variants
+                     if all(self.lowers(idx, model, effect, (ld, effect.band), v)
+                            for ld in loads))
+        family = dataclasses.replace(effect, variants=fits) if fits else effect
+        return OnLoads(self.best_variant(idx, model, family, sigma2, loads), tuple(loads))
 
     def loo_error(self, idx, channel, model: Model) -> float:
         """Leave-one-unit-out error of `channel` over the units `idx`: the sum of
