@@ -176,15 +176,15 @@ def test_the_member_is_the_rules_choice_on_refitted_leave_one_out_errors():
     assert sizes[nl.variants.index(chosen)] < sizes[least]  # smaller, within its noise
 
 
-def _with_term(seed: int, term, count: int = 6) -> Engine:
+def _with_term(seed: int, term, count: int = 6, scale: float = 1.0) -> Engine:
     """`count` flights of `_flight` without its quadratic term, with `term(u, w)` (a dict by
-    load) added, each part scaled to the RMS of the loads' noise (0.02)."""
+    load) added, each part scaled to `scale` times the RMS of the loads' noise (0.02)."""
     rng = np.random.default_rng(seed)
     flights = []
     for k in range(count):
         fl = _flight(rng, k, quadratic_on_m=0.0)
         for ld, g in term(fl.slow["u"], fl.slow["w"]).items():
-            fl.loads["averaged"][ld] = fl.loads["averaged"][ld] + 0.02 * g / np.std(g)
+            fl.loads["averaged"][ld] = fl.loads["averaged"][ld] + scale * 0.02 * g / np.std(g)
         flights.append(fl)
     return Engine(units(flights), ("X", "Z", "M"))
 
@@ -223,3 +223,26 @@ def test_a_product_and_quadratic_loads_are_found_on_six_flights():
         assert "X" in v.loads and v.variant.df >= 1, (seed, v)
         of_u += 0 in v.variant.which
     assert of_u >= 8, of_u
+
+
+def test_an_admitted_effect_never_acts_on_no_load():
+    """An effect the selection admitted (its cross-fit acted on M) whose fit on the training
+    flights alone acts on no load is fitted on M, with a member that lowers M's error there
+    (`Engine.on_loads`), not reported with `acts_on` empty; one not admitted stays as fitted."""
+    from types import SimpleNamespace
+
+    from fwid.diagnosis._scores import Scores
+
+    eng = _with_term(0, lambda u, w: {"M": u * w}, scale=0.1)  # a tenth of the noise
+    idx = tuple(range(6))
+    nl = get_effect("nonlinear-aero").bound(eng, idx)
+    s2 = eng.mean_square(idx)
+    assert eng.choose(idx, (), nl, s2).loads == ()  # the training flights alone miss it...
+    scores = SimpleNamespace(c=SimpleNamespace(engine=eng, train_idx=idx, sigma2=s2,
+                                               loads=("X", "Z", "M")))
+    admitted = SimpleNamespace(variants=(OnLoads(nl.variants[0], ()),
+                                         OnLoads(nl.variants[4], ("M",))))
+    v = Scores.fitted(scores, (), nl, admitted)  # ...which the other half found
+    assert v.loads == ("M",)
+    assert eng.lowers(idx, (), nl, ("M", "averaged"), v.variant) and v.variant.products
+    assert Scores.fitted(scores, (), nl, None).loads == ()
