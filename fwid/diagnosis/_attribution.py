@@ -263,16 +263,15 @@ class Engine:
 
     def lowers(self, idx, model: Model, effect: Effect, channel, variant=None) -> bool:
         """Does `effect` (added to `model`) lower the leave-one-unit-out error of `channel`
-        over the units `idx`? With `variant`, that member's error below the model's. Else,
-        for a family whose members differ in size (`Effect.sized`), by the
-        one-standard-error rule with the model without it as the family's empty member
-        (`one_standard_error`): the least of many members' leave-one-out errors is biased
-        low, so a member must beat the model without it by more than the noise of that
-        comparison, and a larger one by more than a smaller."""
+        over the units `idx`? With `variant`, that member's error below the model's. Else
+        (a family whose members differ in size, `Effect.sized`), by the one-standard-error
+        rule with the model without it as the family's empty member (`one_standard_error`):
+        the least of many members' leave-one-out errors is biased low, so a member must beat
+        the model without it by more than the noise of that comparison, and a larger one by
+        more than a smaller."""
         base = self.loo_errors(idx, channel, model)
-        if variant is not None or not effect.sized:
-            v = variant if variant is not None else effect.variants[0]
-            return (float(np.sum(self.loo_errors(idx, channel, model + ((effect, v),))[0]))
+        if variant is not None:
+            return (float(np.sum(self.loo_errors(idx, channel, model + ((effect, variant),))[0]))
                     < float(np.sum(base[0])))
         loo = [self.loo_errors(idx, channel, model + ((effect, v),)) for v in effect.variants]
         return one_standard_error([base[0]] + [e for e, _ in loo],
