@@ -238,17 +238,19 @@ class Engine:
         return {ch: max(self.fit(idx, ch, model)[1] / n, 1e-300)
                 for band in ("averaged", "flapping") for ch in self.channels(band)}
 
-    def best_variant(self, idx, model: Model, effect: Effect, sigma2: dict):
+    def best_variant(self, idx, model: Model, effect: Effect, sigma2: dict, loads=None):
         """The variant of `effect` (added to `model`) with the least training error on units
-        `idx`, summed over its band's channels, each scaled by `sigma2` (the baseline's); for
-        an effect whose variants differ in size (`Effect.sized`), the least
-        leave-one-unit-out error instead (with fewer than three units, the training error).
-        Of members that tie, the first (the variants are listed simplest first): a rate limit
-        that never binds is a plain lag, and must not be reported as a rate limit. Members of
-        different sizes are weighed by the one-standard-error rule (`one_standard_error`)."""
+        `idx`, summed over the channels of its band it acts on (`loads`; default: those it
+        is `allowed` on), each scaled by `sigma2` (the baseline's); for an effect whose
+        variants differ in size (`Effect.sized`), the least leave-one-unit-out error instead
+        (with fewer than three units, the training error). Of members that tie, the first
+        (the variants are listed simplest first): a rate limit that never binds is a plain
+        lag, and must not be reported as a rate limit. Members of different sizes are
+        weighed by the one-standard-error rule (`one_standard_error`)."""
         if len(effect.variants) == 1:
             return effect.variants[0]
-        chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
+        chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)
+                 and (loads is None or ch[0] in loads)]
         if effect.sized and len(idx) >= 3:
             loo = [[self.loo_errors(idx, ch, model + ((effect, v),)) for ch in chans]
                    for v in effect.variants]
@@ -259,26 +261,56 @@ class Engine:
                      for ch in chans) for v in effect.variants]
         return effect.variants[simplest_best(costs)]
 
+    def lowers(self, idx, model: Model, effect: Effect, channel, variant=None) -> bool:
+        """Does `effect` (added to `model`) lower the leave-one-unit-out error of `channel`
+        over the units `idx`? With `variant`, that member's error below the model's. Else
+        (a family whose members differ in size, `Effect.sized`), by the one-standard-error
+        rule with the model without it as the family's empty member (`one_standard_error`):
+        the least of many members' leave-one-out errors is biased low, so a member must beat
+        the model without it by more than the noise of that comparison, and a larger one by
+        more than a smaller."""
+        base = self.loo_errors(idx, channel, model)
+        if variant is not None:
+            return (float(np.sum(self.loo_errors(idx, channel, model + ((effect, variant),))[0]))
+                    < float(np.sum(base[0])))
+        loo = [self.loo_errors(idx, channel, model + ((effect, v),)) for v in effect.variants]
+        return one_standard_error([base[0]] + [e for e, _ in loo],
+                                  [base[1]] + [k + numbers_of(v) for (_, k), v
+                                               in zip(loo, effect.variants)]) != 0
+
     def choose(self, idx, model: Model, effect: Effect, sigma2: dict) -> OnLoads:
-        """`effect`'s variant (`best_variant`) and the loads it acts on: those of its band
-        whose leave-one-flight-out error over the units `idx` (each flight scored by the
-        model fitted on the others, its local terms its own) it lowers. No threshold: a
-        column set that only fits noise raises that error. Every load for an effect that
-        replaces the deflection, or with fewer than three units. Only the loads it is
-        `allowed` on. For an effect whose variants differ in size (`Effect.sized`) the whole
-        family (its first variant) decides the loads: its best subset, chosen by the same
-        leave-one-flight-out error, would beat the baseline on noise alone (the least of
-        many such errors is biased low)."""
-        v = self.best_variant(idx, model, effect, sigma2)
+        """`effect`'s loads and variant. The loads: those of its band whose
+        leave-one-flight-out error over the units `idx` (each flight scored by the model
+        fitted on the others, its local terms its own) it lowers (`lowers`). No threshold
+        beyond the noise of that comparison: a column set that only fits noise raises that
+        error. Every load for an effect that replaces the deflection, or with fewer than
+        three units. Only the loads it is `allowed` on. The variant (`best_variant`): for a
+        family whose members differ in size, chosen on those loads only, among the members
+        that lower the error of each of them (`on_loads`), so the member explains what the
+        family was found to act on, not the noise of the loads it does not touch."""
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)]
-        every = OnLoads(v, tuple(ld for ld, _ in chans))
+        every = tuple(ld for ld, _ in chans)
         if len(idx) < 3 or effect.replaces_input:
-            return every
-        judge = OnLoads(effect.variants[0], every.loads) if effect.sized else every
-        loads = tuple(ch[0] for ch in chans
-                      if self.loo_error(idx, ch, model + ((effect, judge),))
-                      < self.loo_error(idx, ch, model))
-        return OnLoads(v, loads)
+            return OnLoads(self.best_variant(idx, model, effect, sigma2), every)
+        if not effect.sized:
+            v = self.best_variant(idx, model, effect, sigma2)
+            return OnLoads(v, tuple(ch[0] for ch in chans
+                                    if self.lowers(idx, model, effect, ch, OnLoads(v, every))))
+        loads = tuple(ch[0] for ch in chans if self.lowers(idx, model, effect, ch))
+        return self.on_loads(idx, model, effect, sigma2, loads)
+
+    def on_loads(self, idx, model: Model, effect: Effect, sigma2: dict, loads) -> OnLoads:
+        """`effect` acting on `loads`, its member (`best_variant` on those loads) among those
+        that lower the leave-one-unit-out error over the units `idx` of each of them
+        (`lowers`; all members when none does). With no load, it acts on none (the member
+        over every load it is allowed on, for the record)."""
+        if not loads:
+            return OnLoads(self.best_variant(idx, model, effect, sigma2), ())
+        fits = tuple(v for v in effect.variants
+                     if all(self.lowers(idx, model, effect, (ld, effect.band), v)
+                            for ld in loads))
+        family = dataclasses.replace(effect, variants=fits) if fits else effect
+        return OnLoads(self.best_variant(idx, model, family, sigma2, loads), tuple(loads))
 
     def loo_error(self, idx, channel, model: Model) -> float:
         """Leave-one-unit-out error of `channel` over the units `idx`: the sum of

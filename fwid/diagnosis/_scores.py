@@ -91,12 +91,26 @@ class Scores:
         each load scaled by its baseline mean square."""
         return colour(self._slow(res), self.dts, self.c.own, self.scale)["redness"]
 
-    def models(self, effects):
+    def fitted(self, model, e: Effect, ev=None):
+        """`e` added to `model`, fitted on the training flights (`Engine.choose`). An effect
+        the selection admitted (`ev`: the evidence that did) whose fit there acts on no load
+        acts on those its cross-fit's fits did (`Engine.on_loads`): its held-out gain came
+        from them, and a member that acts on nothing would report no shrink for it."""
+        c = self.c
+        v = c.engine.choose(c.train_idx, model, e, c.sigma2)
+        if v.loads or ev is None:
+            return v
+        found = {ld for h in ev.variants for ld in h.loads}
+        loads = tuple(ld for ld in c.loads if ld in found)
+        return c.engine.on_loads(c.train_idx, model, e, c.sigma2, loads) if loads else v
+
+    def models(self, effects, evidence=None):
         """Each effect of `effects` with the model of it and those before it, fitted on the
-        training flights in that order, as the selection adds them."""
-        c, model = self.c, ()
+        training flights in that order, as the selection adds them (`fitted`; `evidence`,
+        by name, what admitted each)."""
+        model = ()
         for e in effects:
-            model = model + ((e, c.engine.choose(c.train_idx, model, e, c.sigma2)),)
+            model = model + ((e, self.fitted(model, e, (evidence or {}).get(e.name))),)
             yield e, model
 
     def redness_of(self, names) -> float:
@@ -119,7 +133,9 @@ class Scores:
         c = self.c
         named = {e.name for e in c.catalogue}
         effects, unexplained, prev, in_sim = [], None, self.rms_before, []
-        for (e, ev), (_, model) in zip(sel.chosen, self.models(e for e, _ in sel.chosen)):
+        admitted = {e.name: ev for e, ev in sel.chosen}
+        for (e, ev), (_, model) in zip(sel.chosen, self.models((e for e, _ in sel.chosen),
+                                                               admitted)):
             res = self.residuals(model)
             now = self.rms_by_load([self.full(r) for r in res])
             affected = self.affected(ev)
@@ -150,7 +166,8 @@ class Scores:
         scored on the test flights; its evidence from the last round it was tested in)."""
         c = self.c
         ev, level = sel.last[e.name], sel.level[e.name]
-        variant = c.engine.choose(c.train_idx, (), e, c.sigma2)
+        chosen = e.name in [x.name for x, _ in sel.chosen]
+        variant = self.fitted((), e, ev if chosen else None)
         after_band = self.residuals(((e, variant),))
         after_res = [self.full(r) for r in after_band]
         self.augmented[e.name] = after_res
@@ -166,7 +183,7 @@ class Scores:
                      for b, x, a in zip(BAND_NAMES, eb, ea)}
         return {
             "effect": e.name,
-            "significant": e.name in [x.name for x, _ in sel.chosen],
+            "significant": chosen,
             "shrink_pct": shrink,
             "test_rms_before": self.rms_before,
             "test_rms_after": rms_after,

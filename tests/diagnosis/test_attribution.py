@@ -174,3 +174,75 @@ def test_the_member_is_the_rules_choice_on_refitted_leave_one_out_errors():
     least = int(np.argmin([e.sum() for e in errors]))
     assert chosen.which == nl.variants[least].which == (1,)  # the bend of w
     assert sizes[nl.variants.index(chosen)] < sizes[least]  # smaller, within its noise
+
+
+def _with_term(seed: int, term, count: int = 6, scale: float = 1.0) -> Engine:
+    """`count` flights of `_flight` without its quadratic term, with `term(u, w)` (a dict by
+    load) added, each part scaled to `scale` times the RMS of the loads' noise (0.02)."""
+    rng = np.random.default_rng(seed)
+    flights = []
+    for k in range(count):
+        fl = _flight(rng, k, quadratic_on_m=0.0)
+        for ld, g in term(fl.slow["u"], fl.slow["w"]).items():
+            fl.loads["averaged"][ld] = fl.loads["averaged"][ld] + scale * 0.02 * g / np.std(g)
+        flights.append(fl)
+    return Engine(units(flights), ("X", "Z", "M"))
+
+
+def _chosen(eng: Engine) -> OnLoads:
+    idx = tuple(range(len(eng.units)))
+    return eng.choose(idx, (), get_effect("nonlinear-aero").bound(eng, idx),
+                      eng.mean_square(idx))
+
+
+def test_the_member_explains_the_loads_the_family_acts_on():
+    """A bend of Z in w alone, as strong as the noise, on six flights: wherever the family
+    acts, its member is a function of w (chosen on the loads it acts on, not on the noise of
+    X and M), and it acts on Z in most draws (the member may not be one that adds nothing
+    there)."""
+    found = 0
+    for seed in range(10):
+        v = _chosen(_with_term(seed, lambda u, w: {"Z": w * w}))
+        assert v.loads in ((), ("Z",)), (seed, v.loads)
+        if v.loads:
+            found += 1
+            assert 1 in v.variant.which and v.variant.df >= 1, (seed, v.variant)
+    assert found >= 6, found
+
+
+def test_a_product_and_quadratic_loads_are_found_on_six_flights():
+    """A `u w` product on M, and loads quadratic in u (X) and w (Z), each as strong as the
+    noise: the family acts on the load that holds the term in every draw of six flights,
+    with a member that holds it (the products; mostly a function of u, among the members
+    that lower the error of every load the family acts on: 9 of 10 when written)."""
+    of_u = 0
+    for seed in range(10):
+        v = _chosen(_with_term(seed, lambda u, w: {"M": u * w}))
+        assert v.loads == ("M",) and v.variant.products, (seed, v)
+        v = _chosen(_with_term(seed, lambda u, w: {"X": u * u, "Z": w * w}))
+        assert "X" in v.loads and v.variant.df >= 1, (seed, v)
+        of_u += 0 in v.variant.which
+    assert of_u >= 8, of_u
+
+
+def test_an_admitted_effect_never_acts_on_no_load():
+    """An effect the selection admitted (its cross-fit acted on M) whose fit on the training
+    flights alone acts on no load is fitted on M, with a member that lowers M's error there
+    (`Engine.on_loads`), not reported with `acts_on` empty; one not admitted stays as fitted."""
+    from types import SimpleNamespace
+
+    from fwid.diagnosis._scores import Scores
+
+    eng = _with_term(0, lambda u, w: {"M": u * w}, scale=0.1)  # a tenth of the noise
+    idx = tuple(range(6))
+    nl = get_effect("nonlinear-aero").bound(eng, idx)
+    s2 = eng.mean_square(idx)
+    assert eng.choose(idx, (), nl, s2).loads == ()  # the training flights alone miss it...
+    scores = SimpleNamespace(c=SimpleNamespace(engine=eng, train_idx=idx, sigma2=s2,
+                                               loads=("X", "Z", "M")))
+    admitted = SimpleNamespace(variants=(OnLoads(nl.variants[0], ()),
+                                         OnLoads(nl.variants[4], ("M",))))
+    v = Scores.fitted(scores, (), nl, admitted)  # ...which the other half found
+    assert v.loads == ("M",)
+    assert eng.lowers(idx, (), nl, ("M", "averaged"), v.variant) and v.variant.products
+    assert Scores.fitted(scores, (), nl, None).loads == ()

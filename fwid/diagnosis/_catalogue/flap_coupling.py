@@ -51,7 +51,7 @@ class Modulation:
                                                 else ", linearly")
 
 
-#: The members, the largest first (it decides the loads, `Engine.choose`).
+#: The members, the largest first (`Engine.choose` weighs them by their size).
 MODULATIONS = (Modulation(True, False, True), Modulation(False, True, False),
                Modulation(True, False, False), Modulation(False, False, True))
 

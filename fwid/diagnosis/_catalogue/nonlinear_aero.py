@@ -58,8 +58,8 @@ class Terms:
 
 
 ALL = (0, 1, 2)
-#: The members, the whole family first (it decides the loads, `Engine.choose`): every
-#: state at each size, with and without their products; each state alone.
+#: The members, the whole family first: every state at each size, with and without their
+#: products; each state alone (`Engine.choose` weighs them by their size).
 TERMS = ((Terms(ALL, MAX_DF, True),)
          + tuple(Terms(ALL, df) for df in (1, 2, MAX_DF))
          + (Terms(ALL, 0, True), Terms(ALL, 2, True))
