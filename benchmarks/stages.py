@@ -48,8 +48,7 @@ from fwid.simulation._simulate import simulate, simulate_sensitivities  # noqa: 
 
 import _shared as M  # noqa: E402
 import cases.delfly_speed as P  # noqa: E402
-from peers.jax_output_error import rk4_scan  # noqa: E402
-from simd import sensitivities_inner  # noqa: E402
+from simd import sensitivities_hand, sensitivities_inner  # noqa: E402
 
 
 class _Timer:
@@ -122,13 +121,7 @@ def kernels(model, F, n, rounds):
     sens = flights(lambda t_, e: simulate_sensitivities(sm, e, sm.merge, t_))
     sim = flights(lambda t_, e: simulate(sm, e, sm.merge(t_))[1])
 
-    def ref_one(t_, x0, u, c):
-        def s(tt):
-            y = rk4_scan(P.lon_f_jax, tt, x0, u, dt, c)
-            return y, y
-        S, y = jax.jacfwd(s, has_aux=True)(t_)
-        return y, S
-    ref = jax.jit(jax.vmap(ref_one))
+    ref = jax.jit(jax.vmap(lambda t_, x0, u, c: sensitivities_hand(t_, x0, u, c, dt)))
     inner = jax.jit(lambda t_, x0, u, c: sensitivities_inner(t_, x0, u, c, dt))
     ys, S = sens(th, batch)
     v = batch.z - ys
@@ -266,10 +259,7 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=10)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", default=str(HERE / "results" / "speed_stages.json"))
-    args = ap.parse_args(argv)
-    M.print_backend()
-    res = run(args)
-    M.write(res, args.out, markdown(res))
+    M.run_and_write(run, markdown, ap.parse_args(argv))
 
 
 if __name__ == "__main__":
