@@ -12,7 +12,7 @@ start true x 1.2). Measured in one run:
    flight: 899 RK4 steps of a 4 + 16 x 4 state) for `--flights` flights on one CPU device,
    in three layouts, timed round-robin (minimum and median of `--rounds`):
    - fwid: `simulate_sensitivities` under `jax.vmap` over the flights (what `fit_each` runs:
-     flights outermost, `(N, 17, 4)`);
+     flights outermost, the state `(N, 4)` and its sensitivities `(N, 16, 4)`);
    - hand-written `lax.scan` RK4 with `jacfwd`, under `jax.vmap` (the same layout);
    - hand-written `lax.scan` RK4 written on `(17, 4, N)` arrays, **flights innermost**: every
      operation of the model acts on a vector of N flights, the layout SIMD units want.
@@ -135,7 +135,8 @@ def run(args) -> dict:
     x0_n = put(jnp.asarray(np.stack(F["x0"])))
     c_n = {k: put(jnp.asarray([c[k] for c in F["consts_list"]])) for k in P.CONST_KEYS}
 
-    fwid_kernel = jax.jit(jax.vmap(lambda th, e: simulate_sensitivities(sm, e, sm.merge, th)))
+    fwid_kernel = jax.jit(jax.vmap(  # as fit_each runs it (paired: its layout for many flights)
+        lambda th, e: simulate_sensitivities(sm, e, sm.merge, th, paired=True)))
 
     ref_kernel = jax.jit(jax.vmap(lambda th, x0, u, c: sensitivities_hand(th, x0, u, c, dt)))
     inner_kernel = jax.jit(lambda th, x0, u, c: sensitivities_inner(th, x0, u, c, dt))

@@ -118,7 +118,7 @@ def kernels(model, F, n, rounds):
         return jax.jit(lambda t_, e: jax.tree.map(
             lambda a: a[None], fn(t_[0], jax.tree.map(lambda a: a[0], e))))
 
-    sens = flights(lambda t_, e: simulate_sensitivities(sm, e, sm.merge, t_))
+    sens = flights(lambda t_, e: simulate_sensitivities(sm, e, sm.merge, t_, paired=n > 1))
     sim = flights(lambda t_, e: simulate(sm, e, sm.merge(t_))[1])
 
     ref = jax.jit(jax.vmap(lambda t_, x0, u, c: sensitivities_hand(t_, x0, u, c, dt)))
