@@ -198,6 +198,14 @@ def _jsonable(o):
     return str(o)
 
 
+def run_and_write(run, markdown, args):
+    """A benchmark's main: the backend printed, `run(args)`, its JSON to `args.out` and its
+    `markdown(res)` beside it."""
+    print_backend()
+    res = run(args)
+    write(res, args.out, markdown(res))
+
+
 def write(res, out, md):
     """`res` as JSON to `out`, the Markdown `md` next to it (`.md`), and print `md`."""
     out = Path(out)

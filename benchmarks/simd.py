@@ -12,7 +12,7 @@ start true x 1.2). Measured in one run:
    flight: 899 RK4 steps of a 4 + 16 x 4 state) for `--flights` flights on one CPU device,
    in three layouts, timed round-robin (minimum and median of `--rounds`):
    - fwid: `simulate_sensitivities` under `jax.vmap` over the flights (what `fit_each` runs:
-     flights outermost, `(N, 17, 4)`);
+     flights outermost, the state `(N, 4)` and its sensitivities `(N, 16, 4)`);
    - hand-written `lax.scan` RK4 with `jacfwd`, under `jax.vmap` (the same layout);
    - hand-written `lax.scan` RK4 written on `(17, 4, N)` arrays, **flights innermost**: every
      operation of the model acts on a vector of N flights, the layout SIMD units want.
@@ -94,6 +94,16 @@ def sensitivities_inner(th, x0, u, c, dt):
     return jnp.concatenate([y0[None], ys], axis=0)
 
 
+def sensitivities_hand(th, x0, u, c, dt):
+    """Outputs and sensitivities of one flight by the hand-written `lax.scan` RK4 and
+    `jax.jacfwd` (vmap it for the flights-outermost layout): `(n, 4)`, `(n, 4, 16)`."""
+    def sim(t_):
+        y = rk4_scan(P.lon_f_jax, t_, x0, u, dt, c)
+        return y, y
+    S, y = jax.jacfwd(sim, has_aux=True)(th)
+    return y, S
+
+
 def normal_equations_inner(v, S):
     """`sum_k S_k^T R^-1 S_k` and `S_k^T R^-1 v_k` for N flights, flights innermost: `v`
     `(n, 4, N)`, `S` `(n, 16, 4, N)`; R of Eq. (11) per flight."""
@@ -125,15 +135,10 @@ def run(args) -> dict:
     x0_n = put(jnp.asarray(np.stack(F["x0"])))
     c_n = {k: put(jnp.asarray([c[k] for c in F["consts_list"]])) for k in P.CONST_KEYS}
 
-    fwid_kernel = jax.jit(jax.vmap(lambda th, e: simulate_sensitivities(sm, e, sm.merge, th)))
+    fwid_kernel = jax.jit(jax.vmap(  # as fit_each runs it (paired: its layout for many flights)
+        lambda th, e: simulate_sensitivities(sm, e, sm.merge, th, paired=True)))
 
-    def ref_one(th, x0, u, c):
-        def sim(t_):
-            y = rk4_scan(P.lon_f_jax, t_, x0, u, dt, c)
-            return y, y
-        S, y = jax.jacfwd(sim, has_aux=True)(th)
-        return y, S
-    ref_kernel = jax.jit(jax.vmap(ref_one))
+    ref_kernel = jax.jit(jax.vmap(lambda th, x0, u, c: sensitivities_hand(th, x0, u, c, dt)))
     inner_kernel = jax.jit(lambda th, x0, u, c: sensitivities_inner(th, x0, u, c, dt))
     th_i, x0_i, u_i = th_n.T, x0_n.T, jnp.transpose(u_n, (1, 2, 0))  # flights last
 
@@ -266,10 +271,7 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=30)
     ap.add_argument("--fit-repeats", type=int, default=3)
     ap.add_argument("--out", default=str(HERE / "results" / "simd.json"))
-    args = ap.parse_args(argv)
-    M.print_backend()
-    res = run(args)
-    M.write(res, args.out, markdown(res))
+    M.run_and_write(run, markdown, ap.parse_args(argv))
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
     python benchmarks/speed.py --out benchmarks/results/speed.json [--sizes 1,4,16,64,256]
                                [--quick] [--profile]
     python benchmarks/speed.py --process [1,16,64]   # the whole process: fwid identify
+    python benchmarks/speed.py --stages [1,64]       # fit_each by stage, parallel in time
 
 The same fits, in the same run, by three methods (set up in `benchmarks/_shared.py`):
 
@@ -372,9 +373,16 @@ def main(argv=None):
                     "SIZES flights (default 1,16,64), cold and warm compilation cache, against "
                     "scipy in the same run (benchmarks/_shared.py); writes "
                     "results/speed_process.json and .md")
+    ap.add_argument("--stages", nargs="?", const="1,64", default=None, metavar="SIZES",
+                    help="instead: fit_each by stage on SIZES flights (default 1,64) beside the "
+                    "hand-written layouts, and parallel in time at 900 and 9000 samples "
+                    "(benchmarks/stages.py); writes results/speed_stages.json and .md")
     args = ap.parse_args(argv)
     if args.process:
         return process_row(args)
+    if args.stages:
+        import stages
+        return stages.main(["--sizes", args.stages])
     if args.quick:
         args.sizes = "1,4"
         args.fwid_repeats, args.fwid_batch_repeats, args.ref_repeats = 3, 1, 7

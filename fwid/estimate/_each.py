@@ -47,8 +47,9 @@ def _fit_each_batched(model, theta0s, batches, prior=None, mesh=None, **kw):
         out = _fit_batch(model, theta0s[0], jax.tree.map(lambda a: a[0], batches), prior, **kw)
         return jax.tree.map(lambda a: a[None], out)
 
-    def each(th, b, pb):
-        return jax.vmap(lambda th1, b1: _fit_batch(model, th1, b1, pb, **kw))(th, b)
+    def each(th, b, pb):  # the sensitivities laid out for many flights (`paired`)
+        return jax.vmap(lambda th1, b1: _fit_batch(model, th1, b1, pb, paired=True, **kw))(
+            th, b)
 
     if mesh is None:
         return each(theta0s, batches, prior)

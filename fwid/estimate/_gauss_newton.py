@@ -7,6 +7,7 @@ import jax
 import jax.numpy as jnp
 import lineax as lx
 import optimistix as optx
+from jax import lax
 from jaxtyping import Array, PyTree, Scalar
 
 from ._prior import PriorBounds
@@ -63,10 +64,33 @@ class NoiseModel(eqx.Module):
         vv = v.reshape(-1, ny)
         JJ = J.reshape(vv.shape[0], ny, J.shape[-1])
         Rinv = jnp.linalg.inv(self.R(vv))
-        # Contract J where it lies (whitening a transposed copy first is slower on XLA:CPU).
-        H = jnp.einsum("kip,ij,kjq->pq", JJ, Rinv, JJ)
-        g = jnp.einsum("kip,ij,kj->p", JJ, Rinv, vv)
-        return H, g
+        return normal_equations(vv, JJ, Rinv)
+
+
+def _normal_terms(vv, JJ, Rinv):
+    """`sum_k J_k^T R^-1 J_k` and `sum_k J_k^T R^-1 v_k` of one fit: `vv` `(k, ny)`, `JJ`
+    `(k, ny, p)`. Contracts J where it lies (whitening a transposed copy first is slower on
+    XLA:CPU)."""
+    H = jnp.einsum("kip,ij,kjq->pq", JJ, Rinv, JJ)
+    g = jnp.einsum("kip,ij,kj->p", JJ, Rinv, vv)
+    return H, g
+
+
+@jax.custom_batching.custom_vmap
+def normal_equations(vv, JJ, Rinv):
+    """[`_normal_terms`][]; under `jax.vmap` (many fits in one call, `fit_each`) one fit after
+    another (`lax.map`) instead of one batched contraction: a fit's Jacobian (460 kB for
+    900 samples, 4 outputs, 16 parameters) stays in the cache while it is read twice, where
+    the batched contraction streamed every fit's from memory (64 flights: 2.5-3x slower on a
+    2-core CPU, `benchmarks/stages.py`). Each fit's numbers are those of the fit alone."""
+    return _normal_terms(vv, JJ, Rinv)
+
+
+@normal_equations.def_vmap
+def _fit_by_fit(axis_size, in_batched, vv, JJ, Rinv):
+    args = tuple(a if b else jnp.broadcast_to(a, (axis_size,) + a.shape)
+                 for a, b in zip((vv, JJ, Rinv), in_batched))
+    return lax.map(lambda a: _normal_terms(*a), args), (True, True)
 
 
 def jacobian_once(

@@ -59,7 +59,8 @@ def raw_residuals(model, params, batch):
     return (batch.z - y) * batch.mask[..., None]
 
 
-def residuals_with_jacobian(model: GreyBoxModel, batch: Experiment, n_local_batch: int = 0):
+def residuals_with_jacobian(model: GreyBoxModel, batch: Experiment, n_local_batch: int = 0,
+                            paired: bool = False):
     """The function `theta -> (residuals, d residuals / d theta)` of a (padded) batch of
     experiments, `(B, n, ny)` and `(B, n, ny, p)`, masked, from one RK4 solve per experiment
     of its state and forward sensitivities ([`simulate_sensitivities`][]). In a joint fit
@@ -73,7 +74,7 @@ def residuals_with_jacobian(model: GreyBoxModel, batch: Experiment, n_local_batc
             if n_local_batch == 0:
                 def params_of(th):
                     return flight_params(merge_batch(model, th, 0), b)
-                return simulate_sensitivities(model, e, params_of, theta)
+                return simulate_sensitivities(model, e, params_of, theta, paired=paired)
             # flight b depends on the global parameters and its own locals only: its
             # sensitivities are integrated for those, the rest of its row is zero
             own = flight_columns(model, n_local_batch, b)
@@ -81,7 +82,8 @@ def residuals_with_jacobian(model: GreyBoxModel, batch: Experiment, n_local_batc
             def params_of(th_own):
                 return flight_params(merge_batch(model, theta.at[own].set(th_own),
                                                  n_local_batch), b)
-            ys, dys_own = simulate_sensitivities(model, e, params_of, theta[own])
+            ys, dys_own = simulate_sensitivities(model, e, params_of, theta[own],
+                                                 paired=paired)
             full = jnp.zeros(dys_own.shape[:-1] + theta.shape, dys_own.dtype)
             return ys, full.at[..., own].set(dys_own)
 
@@ -98,7 +100,8 @@ def residuals_with_jacobian(model: GreyBoxModel, batch: Experiment, n_local_batc
 
 
 def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, prior: PriorBounds | None = None,
-               *, diagonal, max_passes, max_steps, rtol, cost_rtol, n_local_batch=0):
+               *, diagonal, max_passes, max_steps, rtol, cost_rtol, n_local_batch=0,
+               paired=False):
     """The whole estimator on one (padded) batch of experiments that share the parameters.
 
     Pure and jit/vmap-able: one `optimistix.least_squares` solve with [`RelaxedGaussNewton`][]
@@ -112,12 +115,13 @@ def _fit_batch(model: GreyBoxModel, theta0, batch: Experiment, prior: PriorBound
     `prior`: a prior and bounds ([`PriorBounds`][]): the prior's residuals join the cost,
     the step and the information matrix (`M = M_data + diag(1/std^2)`), the bounds make the
     step the bounded-variable one and the parameters held at an active bound leave the
-    covariance (`covariance_held`).
+    covariance (`covariance_held`). `paired`: the sensitivities' layout for a fit that runs
+    under `vmap` with others ([`simulate_sensitivities`][]).
     """
     del max_passes
     noise = NoiseModel.of_data(batch.z, batch.mask, diagonal)
 
-    residuals_and_jacobian = residuals_with_jacobian(model, batch, n_local_batch)
+    residuals_and_jacobian = residuals_with_jacobian(model, batch, n_local_batch, paired)
 
     sol = solve_relaxed(residuals_and_jacobian, theta0, noise, rtol=rtol, cost_rtol=cost_rtol,
                         max_steps=max_steps, prior=prior)

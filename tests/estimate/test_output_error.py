@@ -239,13 +239,40 @@ def test_blow_up_start_recovers_or_raises_diverged(lon_flight):
 
 def test_fit_each_identical_to_fitting_each_flight_alone(lon_flight):
     """The vmapped estimator freezes a flight once it has converged: the batched estimates
-    are those of fwid.fit on each flight alone (1e-9 relative)."""
+    are those of fwid.fit on each flight alone (1e-10 relative, the uncertainties too)."""
     exps = [lon_flight.experiment(lon_flight.ys + _white(lon_flight, seed=s)) for s in (1, 2, 3)]
     batched = fwid.fit_each(longitudinal(), exps)
     for e, b in zip(exps, batched):
         a = fit(longitudinal(), e)
-        np.testing.assert_allclose(np.asarray(b.theta), np.asarray(a.theta), rtol=1e-9, atol=0)
+        np.testing.assert_allclose(np.asarray(b.theta), np.asarray(a.theta), rtol=1e-10, atol=0)
+        np.testing.assert_allclose(np.asarray(b.std), np.asarray(a.std), rtol=1e-10, atol=0)
         assert int(b.steps) == int(a.steps) and bool(b.converged)
+
+
+def test_batched_normal_equations_are_each_fits_own():
+    """Under `vmap` (fit_each) the normal equations are formed fit by fit: each fit's H and
+    g are bit for bit those of the fit alone, and equal the textbook sums."""
+    import jax
+    import jax.numpy as jnp
+
+    from fwid.estimate._gauss_newton import normal_equations
+
+    rng = np.random.default_rng(0)
+    v = jnp.asarray(rng.standard_normal((5, 300, 4)))
+    J = jnp.asarray(rng.standard_normal((5, 300, 4, 7)) * np.logspace(-2, 2, 7))
+    Rinv = jnp.asarray(np.linalg.inv(np.cov(rng.standard_normal((4, 50))) + np.eye(4)))
+    H, g = jax.jit(jax.vmap(normal_equations, in_axes=(0, 0, None)))(v, J, Rinv)
+    assert H.shape == (5, 7, 7) and g.shape == (5, 7)
+    for i in range(5):
+        Hi, gi = jax.jit(normal_equations)(v[i], J[i], Rinv)
+        np.testing.assert_array_equal(np.asarray(H[i]), np.asarray(Hi))
+        np.testing.assert_array_equal(np.asarray(g[i]), np.asarray(gi))
+        Ji, vi = np.asarray(J[i]), np.asarray(v[i])
+        ref_H = sum(Ji[k].T @ np.asarray(Rinv) @ Ji[k] for k in range(300))
+        ref_g = sum(Ji[k].T @ np.asarray(Rinv) @ vi[k] for k in range(300))
+        np.testing.assert_allclose(np.asarray(Hi), ref_H, rtol=1e-12)
+        np.testing.assert_allclose(np.asarray(gi), ref_g, rtol=1e-10,
+                                   atol=1e-12 * np.abs(ref_g).max())
 
 
 def test_a_joint_fits_jacobian_equals_jacfwd_through_the_simulation():
