@@ -308,7 +308,7 @@ def markdown(res):
     rw = {(r["method"], r["n_flights"]): r for r in res["rows"]}
     f1, j1 = rw.get(("fwid.fit", 1)), rw.get(("JAX reference (jit)", 1))
     if f1 and j1:
-        lines += ["", f"Issue 4 targets: fwid.fit warm / hand-written JAX warm = "
+        lines += ["", f"Targets: fwid.fit warm / hand-written JAX warm = "
                   f"{f1['warm_s'] / j1['warm_s']:.2f}x median, "
                   f"{f1['warm_min_s'] / j1['warm_min_s']:.2f}x min (target <= 2x); fwid.fit "
                   f"warm speed-up over scipy {f1['speedup_vs_scipy']:.0f}x (target >= 50x); "
@@ -320,7 +320,7 @@ def markdown(res):
                   f"{hh['fwid.fit']['median_s']:.4f} s median ({hh['fwid.fit']['min_s']:.4f} min), "
                   f"hand-written JAX {hh['reference']['median_s']:.4f} s "
                   f"({hh['reference']['min_s']:.4f}): **{hh['ratio_median']:.2f}x median, "
-                  f"{hh['ratio_min']:.2f}x min** (issue 14 target: within 2x in every run)."]
+                  f"{hh['ratio_min']:.2f}x min** (target: within 2x in every run)."]
     lines += ["", "Batch scaling, warm time for N flights / warm time for 1 flight (fwid: the "
               "batched call over fwid.fit on one flight):", ""]
     by = {(r["method"], r["n_flights"]): r["warm_s"] for r in res["rows"]}
