@@ -242,10 +242,13 @@ def load_maps(models, maps, consts):
     return [one(m, mp) for m, mp in zip(models, maps)]
 
 
-#: The design of `fwid diagnose --out`'s next flight: `fwid design`'s defaults, the amplitude
-#: that of the flights flown (`flown_amplitude`).
+#: The design of `fwid diagnose --out`'s next flight: `fwid design`'s defaults but for the
+#: optimisation's grid (50 Hz) and restarts (3), those the discrimination benchmark
+#: (`benchmarks/design.py --part discrimination`) measures, so that an ambiguous diagnosis is
+#: not many times slower than a decisive one (`fwid design --discriminate` takes more); the
+#: amplitude that of the flights flown (`flown_amplitude`).
 NEXT_FLIGHT = {"duration": 5.0, "quiet": 1.0, "parametrisation": "steps", "switch_rate": 10.0,
-               "rate": 100.0, "attitude_limit": None, "restarts": 16, "seed": 0,
+               "rate": 50.0, "attitude_limit": None, "restarts": 3, "seed": 0,
                "by": "loads"}
 #: The control of each axis.
 CONTROL = {"lon": "de", "lat": "dr"}
