@@ -59,7 +59,7 @@ def test_the_next_flight_is_written_and_design_discriminate_designs_it_again(
     got = np.loadtxt(out / "next_flight.csv", delimiter=",", skiprows=1)
     assert (out / "next_flight.csv").read_text().splitlines()[0] == "t,de"
     # 3 s at 100 Hz, silent for the first second, within the amplitude flown
-    assert got.shape == (rec["samples"], 2) and rec["samples"] == 301
+    assert got.shape == (rec["samples"], 2) and rec["samples"] == round(3.0 * disc.NEXT_FLIGHT["rate"]) + 1
     assert np.all(got[got[:, 0] <= 1.0, 1] == 0.0)
     assert 0.5 * amp < np.max(np.abs(got[:, 1])) <= amp + 1e-9
     assert rec["criterion"]["designed"] >= max(
