@@ -170,8 +170,10 @@ def _named(explanation: list[str]) -> frozenset[str]:
 def set_score(r: dict) -> dict | None:
     """How a case's confidence set (`confidence_set`: explanations, best first) scores:
     `covered` (single: an explanation names the injected effect and no other entry; pair: one
-    holds both), `holds` (an explanation names the injected effects, maybe with others), `decisive` (single: every explanation names the injected effect and no
-    other), `alarm` (clean, out of catalogue: an explanation names an entry) and `best` (the
+    holds both), `holds` (an explanation names the injected effects, maybe with others),
+    `decisive` (single: every explanation names the injected effect and no other),
+    `decisive_wrong` (single: every explanation names the same catalogue entries, and they
+    are not the injected effect), `alarm` (clean, out of catalogue: an explanation names an entry) and `best` (the
     best explanation's first effect as a verdict: a probe is `unexplained`, none `none`).
     `None` without a set."""
     kept = r.get("confidence_set")
@@ -187,6 +189,8 @@ def set_score(r: dict) -> dict | None:
                                               else any(truth <= n for n in named)),
             "holds": truth is not None and any(truth <= n for n in named),
             "decisive": r["kind"] == "single" and all(n == truth for n in named),
+            "decisive_wrong": (r["kind"] == "single" and bool(named[0]) and named[0] != truth
+                               and all(n == named[0] for n in named)),
             "alarm": r["kind"] in ("clean", "out") and any(named),
             "best": best, "size": len(kept)}
 
@@ -343,6 +347,12 @@ def figure(results, path: Path) -> None:
     plt.close(fig)
 
 
+def _count(scores: list[dict], key: str) -> str:
+    """`k/n` (and the per cent) of the `set_score`s whose `key` holds."""
+    k = sum(bool(s.get(key)) for s in scores)
+    return f"{k}/{len(scores)}" + (f" ({100 * k / len(scores):.0f} %)" if scores else "")
+
+
 def truth_gain_table(results, promised=None, weak: float = 4.0) -> list[str]:
     """Single cases split by their truth's own held-out gain at `weak` %: right verdicts on
     each side; for the weak ones fwid's flights for that gain; and, with `promised` (the
@@ -352,12 +362,31 @@ def truth_gain_table(results, promised=None, weak: float = 4.0) -> list[str]:
         return ["(no truth gains recorded)"]
     strong = [r for r in rows if r["truth_gain_pct"] >= weak]
     low = [r for r in rows if r["truth_gain_pct"] < weak]
-    out = ["| truth's held-out gain | cases | right | fwid's limit % (median) |",
-           "|---|---:|---:|---:|"]
+    out = ["Single effects (each case's truth gain: its effect's own first-round held-out "
+           "gain). Covered: an explanation of the set is the truth alone; decisive and right: "
+           "every kept explanation is; decisive and wrong: every kept explanation names the "
+           "same other entries.", "",
+           "| truth's held-out gain | n | cases | verdict right | covered | decisive and right "
+           "| decisive and wrong | fwid's limit % (median) |",
+           "|---|---|---:|---:|---:|---:|---:|---:|"]
     for name, rr in ((f">= {weak:g} %", strong), (f"< {weak:g} %", low)):
-        lim = sorted(r["detection"]["limit_pct"] for r in rr if r.get("detection"))
-        out.append(f"| {name} | {len(rr)} | {_frac(rr)} | "
-                   + (f"{lim[len(lim) // 2]:.1f} |" if lim else "- |"))
+        for n in sorted({r["n"] for r in rr}):
+            sel = [r for r in rr if r["n"] == n]
+            sc = [set_score(r) or {} for r in sel]
+            lim = sorted(r["detection"]["limit_pct"] for r in sel if r.get("detection"))
+            out.append(f"| {name} | {n}+{n} | {len(sel)} | {_frac(sel)} | "
+                       f"{_count(sc, 'covered')} | {_count(sc, 'decisive')} | "
+                       f"{_count(sc, 'decisive_wrong')} | "
+                       + (f"{lim[len(lim) // 2]:.1f} |" if lim else "- |"))
+    two = [r for r in results if r.get("kind") == "pair" and "truth_gain_pct" in r]
+    if two:
+        out += ["", "Pairs, split by the smaller of their two effects' own gains (both kept: "
+                "an explanation of the set holds both; both named: both in `effects`):", "",
+                "| smaller truth gain | cases | both kept | both named |", "|---|---:|---:|---:|"]
+        for name, rr in ((f">= {weak:g} %", [r for r in two if r["truth_gain_pct"] >= weak]),
+                         (f"< {weak:g} %", [r for r in two if r["truth_gain_pct"] < weak])):
+            sc = [set_score(r) or {} for r in rr]
+            out.append(f"| {name} | {len(rr)} | {_count(sc, 'covered')} | {_frac(rr)} |")
     never = [r for r in low if r.get("flights_for_truth") is None]
     out += ["", f"Weak cases: {len(low)}; fwid says no number of flights finds the gain of "
             f"{len(never)} (at or below the smallest gain that counts, or negative).", "",

@@ -32,7 +32,7 @@ and wall time under `sindy`); then the summary `diagnosis_power_{half}.md` (with
 row beside fwid's) and the power curves `diagnosis_power_{half}.png` (`_power_summary.py`).
 
     python benchmarks/diagnosis_power.py --half dev [--seeds 2] [--workers 1] [--limit N]
-        [--subset kind=single effect=flap-coupling ... [\| kind=pair ...]] [--out ...] [--no-peer]
+        [--subset kind=single effect=flap-coupling ... ['|' kind=pair ...]] [--out ...] [--no-peer]
     python benchmarks/diagnosis_power.py --summarise benchmarks/results/diagnosis_power_dev.jsonl
 
 **The detection limit's promise** (`--promise`): every single case records its truth's own
@@ -256,12 +256,20 @@ def run_case(case: dict, peer: bool = True) -> dict:
 
 
 def truth_gain(rec: dict) -> None:
-    """`rec` (a single case's) gains `truth_gain_pct` (its true effect's first-round
-    cross-fitted gain) and, when below `WEAK_PCT`, `flights_for_truth` (fwid's flights for
-    that gain, training and test together; `None`: no number finds it)."""
+    """`rec` (a single or pair case's) gains `truth_gain_pct`: its true effect's first-round
+    cross-fitted gain (a pair: the smaller of its two effects' own gains, each in
+    `truth_gains_pct`); a single case below `WEAK_PCT` also `flights_for_truth` (fwid's
+    flights for that gain, training and test together; `None`: no number finds it)."""
     from fwid.diagnosis._detection import flights_needed
 
-    first = (rec.get("first_round") or {}).get(rec["effect"])
+    rounds = rec.get("first_round") or {}
+    if rec["kind"] == "pair":
+        gains = {e: rounds[e]["gain_pct"] for e in rec["effect"].split("+") if e in rounds}
+        if len(gains) == 2:
+            rec["truth_gains_pct"] = gains
+            rec["truth_gain_pct"] = min(gains.values())
+        return
+    first = rounds.get(rec["effect"])
     if rec["kind"] != "single" or first is None:
         return
     rec["truth_gain_pct"] = first["gain_pct"]

@@ -85,14 +85,19 @@ def test_the_set_is_scored_for_coverage_decisiveness_alarms_and_pairs():
 
     alone = rec("single", "nonlinear-aero", ["nonlinear-aero", "attitude"])
     assert set_score(alone) == {"covered": True, "holds": True, "decisive": True,
-                                "alarm": False, "best": "nonlinear-aero",
-                                "size": 1}  # a probe is no rival
+                                "decisive_wrong": False, "alarm": False,
+                                "best": "nonlinear-aero", "size": 1}  # a probe is no rival
     two = rec("single", "nonlinear-aero", ["unsteady-aero"], ["nonlinear-aero"])
     assert set_score(two)["covered"] and not set_score(two)["decisive"]
     assert set_score(two)["best"] == "unsteady-aero"
     missed = rec("single", "nonlinear-aero", ["nonlinear-aero", "time-offset"])
     assert not set_score(missed)["covered"]  # the truth alone is not an explanation kept
-    assert set_score(missed)["holds"]
+    assert set_score(missed)["holds"] and set_score(missed)["decisive_wrong"]
+    wrong = rec("single", "nonlinear-aero", ["unsteady-aero", "attitude"], ["unsteady-aero"])
+    assert set_score(wrong)["decisive_wrong"]  # every explanation names the same other entry
+    assert not set_score(two)["decisive_wrong"]  # two rivals: not decisive either way
+    nothing = rec("single", "nonlinear-aero", [])
+    assert not set_score(nothing)["decisive_wrong"]  # none: the detection limit, no name
     clean = rec("clean", "none", [], ["attitude"])
     assert not set_score(clean)["alarm"] and set_score(clean)["best"] == "none"
     alarm = rec("out", "turbulence", ["attitude"], ["unsteady-aero"], verdict="unexplained")
@@ -189,13 +194,27 @@ def test_weak_cases_get_fwids_flight_count_and_the_promise_is_counted():
 
     rows = [rec("nonlinear-aero", 9.0, "nonlinear-aero", 0),
             rec("unsteady-aero", 3.0, "none", 1), rec("time-offset", 1.5, "none", 2)]
+    for r in rows:
+        r["confidence_set"] = [{"explanation": [r["verdict"]] if r["verdict"] != "none"
+                                else [], "p_value": 1.0}]
+    pair = {"kind": "pair", "effect": "time-offset+flap-coupling", "verdict": "time-offset",
+            "effects": ["time-offset", "flap-coupling"],
+            "first_round": {"time-offset": {"gain_pct": 12.0}, "flap-coupling":
+                            {"gain_pct": 3.5}, "nonlinear-aero": {"gain_pct": 1.0}},
+            "confidence_set": [{"explanation": ["time-offset", "flap-coupling"],
+                                "p_value": 1.0}]}
+    dp.truth_gain(pair)
+    assert pair["truth_gain_pct"] == 3.5  # the weaker of its two effects
+    assert pair["truth_gains_pct"] == {"time-offset": 12.0, "flap-coupling": 3.5}
     assert rows[0]["truth_gain_pct"] == 9.0 and "flights_for_truth" not in rows[0]
     assert rows[1]["flights_for_truth"] == det["flights_for"]["3"] >= 8
     assert rows[2]["flights_for_truth"] is None  # below the 2 % that counts: never
     promised = [{"effect": "unsteady-aero", "form": "f", "strength": 1.0, "n": 4, "seed": 1,
                  "found": True, "verdict": "unsteady-aero"}]
-    text = "\n".join(truth_gain_table(rows, promised))
-    assert "| >= 4 % | 1 | 1/1 |" in text and "| < 4 % | 2 | 0/2 |" in text
+    text = "\n".join(truth_gain_table(rows + [pair], promised))
+    assert "| >= 4 % | 4+4 | 1 | 1/1 | 1/1 (100 %) | 1/1 (100 %) | 0/1 (0 %) |" in text
+    assert "| < 4 % | 4+4 | 2 | 0/2 | 0/2 (0 %) | 0/2 (0 %) | 0/2 (0 %) |" in text
+    assert "| < 4 % | 1 | 1/1 (100 %) | 1/1 |" in text  # the pair, by its weaker effect
     assert f"| unsteady-aero | f | 4+4 | 3.00 | {det['flights_for']['3']} | yes |" in text
     assert "| time-offset | f | 4+4 | 1.50 | never | - |" in text
     assert "The promise (named at fwid's flight count, target >= 80 %): 1/1 (100 %)" in text
