@@ -2,17 +2,21 @@
 
 The selection names an effect when its cross-fitted block scores `d_j` (`_significance.py`)
 pass the one-sided t test at the first round's level and their mean reaches the smallest
-gain that counts (`MIN_GAIN`, `_selection.passes`). The statistic is a mean over the scoring
+gain that counts (`MIN_GAIN`, `_selection.passes`); the verdict then also asks the
+confidence set to keep it ahead of `none`: its mean score significantly above the gain it is
+charged, `-log(1 - MIN_GAIN)`, at the set's level (`_confidence.LEVEL`, the one-sided test of
+`_confidence.parsimonious`). The statistic is a mean over the scoring
 blocks of **every** flight, training and test alike (the cross-fit scores each flight's
 blocks by a model fitted on the others), so with `m` flights of the same kind (the same
 length, so `b` blocks each; the same input and noise, so the same block spread `sd`) and
 per-block scores independent given the fit, its standard error is `sd / sqrt(b m)`. The
 smallest true gain found with probability `POWER` (`_significance.power_limit`) is then
 
-    limit(m) = 1 - exp(-( max(t_level se_m, -log(1 - MIN_GAIN)) + t_POWER se_m )),
+    limit(m) = 1 - exp(-( max(t_level se_m, -log(1 - MIN_GAIN) + t_LEVEL se_m)
+                          + t_POWER se_m )),
 
-which falls like `1 / sqrt(m)` while the t test is the harder bar and never below
-`MIN_GAIN`: a gain at or below it is not named however many flights are flown.
+which falls like `1 / sqrt(m)` and never below `MIN_GAIN`: a gain at or below it is not
+named however many flights are flown.
 
 `sd` is the spread of the first-round block scores (each entry against the baseline alone)
 of the entry that gained most, not below the median over the entries. An effect's scores
@@ -20,9 +24,7 @@ spread more than noise does: it shows more in the blocks that excite it than in 
 so the spread grows with the effect (on the benchmark's flights, an effect's own spread is
 about its mean score or more, where an entry that fits nothing spreads a few times less).
 The strongest entry seen carries that growth; the median is the noise's. Nothing is tuned:
-the level, the power, the floor and the blocks are the selection's own. The limit is that
-of the selection's test; the verdict also asks the confidence set to keep the effect ahead
-of `none`, a test of the same scores with the same charge.
+the levels, the power, the floor and the blocks are the selection's and the set's own.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ._confidence import LEVEL as SET_LEVEL
 from ._significance import POWER, Evidence, power_limit
 
 #: Gains [%] whose flight counts `diagnosis.json` gives (`flights_for`).
@@ -63,7 +66,7 @@ class DetectionLimit:
         flights of this kind (default: these)."""
         m = self.flights if flights is None else flights
         n = max(1, round(self.blocks_per_flight * m))
-        d = power_limit(self.sd, n, self.level, -math.log1p(-self.min_gain))
+        d = power_limit(self.sd, n, self.level, -math.log1p(-self.min_gain), SET_LEVEL)
         return 1.0 - math.exp(-d)
 
     def flights_needed(self, gain_pct: float) -> int | None:
@@ -95,11 +98,11 @@ class DetectionLimit:
             "blocks": self.blocks,
             "blocks_per_flight": self.blocks_per_flight,
             "block_spread": self.sd,
-            "rule": (f"limit(m) = 1 - exp(-(max(t_level se, -ln(1 - {self.min_gain:g})) + "
-                     f"t_{POWER:g} se)), se = {self.sd:.4g} / sqrt({self.blocks_per_flight:.4g}"
-                     f" m) for m flights of this kind (training and test together): "
-                     f"{lim:.2f} % at m = {self.flights}, falling like 1/sqrt(m) while the t "
-                     f"test is the harder bar, then towards {floor:g} %, never below it"),
+            "rule": (f"limit(m) = 1 - exp(-(max(t_level se, -ln(1 - {self.min_gain:g}) + "
+                     f"t_{SET_LEVEL:g} se) + t_{POWER:g} se)), se = {self.sd:.4g} / "
+                     f"sqrt({self.blocks_per_flight:.4g} m) for m flights of this kind "
+                     f"(training and test together): {lim:.2f} % at m = {self.flights}, "
+                     f"falling like 1/sqrt(m) towards {floor:g} %, never below it"),
             "assumption": "more flights of the same kind (length, input, noise), per-block "
                           "scores independent given the fit; the block spread of the entry "
                           "that gained most (not below the median over the entries)",

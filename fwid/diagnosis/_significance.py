@@ -127,18 +127,22 @@ class Evidence:
         }
 
 
-def power_limit(sd: float, n: int, level: float, floor: float = 0.0) -> float:
+def power_limit(sd: float, n: int, level: float, floor: float = 0.0,
+                floor_level: float | None = None) -> float:
     """The true mean block score `d` that the test passes with probability `POWER`: `n`
     blocks of spread `sd`, the one-sided t test at `level` and, with `floor > 0`, the mean
-    also at least `floor` (the selection's smallest gain, `-log(1 - MIN_GAIN)`). The
-    estimated mean is the true one plus `sd / sqrt(n)` times a t variate, so it exceeds
-    the larger of the two bars with probability `POWER` when the true mean is that bar plus
-    the `POWER` quantile of the t times the standard error. `inf` for fewer than 2 blocks."""
+    also at least `floor` (the selection's smallest gain, `-log(1 - MIN_GAIN)`), or, with
+    `floor_level`, significantly above `floor` at that level (the confidence set's test of
+    an effect against `none` with the gain it is charged). The estimated mean is the true
+    one plus `sd / sqrt(n)` times a t variate, so it exceeds the larger of the bars with
+    probability `POWER` when the true mean is that bar plus the `POWER` quantile of the t
+    times the standard error. `inf` for fewer than 2 blocks."""
     if n < 2:
         return math.inf
     df = n - 1
     se = sd / math.sqrt(n)
-    return max(stats.t.isf(level, df) * se, floor) + stats.t.isf(1.0 - POWER, df) * se
+    above = 0.0 if floor_level is None else stats.t.isf(floor_level, df) * se
+    return max(stats.t.isf(level, df) * se, floor + above) + stats.t.isf(1.0 - POWER, df) * se
 
 
 def evidence(engine: Engine, halves: list[Half], models: list[Model], effect: Effect) -> Evidence:

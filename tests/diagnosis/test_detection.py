@@ -4,7 +4,9 @@ import math
 
 import numpy as np
 import pytest
+from scipy import stats
 
+from fwid.diagnosis._confidence import LEVEL as SET_LEVEL
 from fwid.diagnosis._detection import DetectionLimit, detection_limit, flights_needed
 from fwid.diagnosis._selection import passes
 from fwid.diagnosis._significance import Evidence
@@ -50,20 +52,29 @@ def test_a_gain_at_or_below_the_smallest_that_counts_is_never_found():
     assert flights_needed(block, 3.0) == lim.flights_needed(3.0)  # back from the JSON
 
 
+def _named(d, lim):
+    """Whether block scores `d` get the effect named: the selection's rule (`passes`: the t
+    test at the level and the smallest gain) and the confidence set's test against `none`
+    (the mean significantly above the charge at the set's level; its block bootstrap is the
+    normal test of the mean, `test_confidence.py`)."""
+    charge = -math.log1p(-lim.min_gain)
+    t = (np.mean(d) - charge) / (np.std(d, ddof=1) / math.sqrt(d.size))
+    return passes(Evidence("x", (), d, {}, {}), lim.level, lim.min_gain) and \
+        t > stats.t.isf(SET_LEVEL, d.size - 1)
+
+
 def test_a_gain_at_the_limit_is_found_with_eighty_percent_power():
-    """Simulated block scores with the true mean at the limit pass the selection's rule
-    (`passes`: the t test at the level and the smallest gain) about 80 % of the time."""
+    """Simulated block scores with the true mean at the limit get the effect named (the
+    selection's rule and the set's test) about 80 % of the time."""
     lim = _limit(sd=0.08, blocks=60, flights=12)
     dtrue = -math.log1p(-lim.limit())
     rng = np.random.default_rng(1)
-    found = [passes(Evidence("x", (), rng.normal(dtrue, 0.08, size=60), {}, {}), lim.level,
-                    lim.min_gain) for _ in range(3000)]
+    found = [_named(rng.normal(dtrue, 0.08, size=60), lim) for _ in range(3000)]
     assert np.mean(found) == pytest.approx(0.8, abs=0.03)
     # at the flights it needs for a 4 % gain, a 4 % gain is found at least as often
     m = lim.flights_needed(4.0)
     n = round(lim.blocks_per_flight * m)
-    found = [passes(Evidence("x", (), rng.normal(-math.log(0.96), 0.08, size=n), {}, {}),
-                    lim.level, lim.min_gain) for _ in range(3000)]
+    found = [_named(rng.normal(-math.log(0.96), 0.08, size=n), lim) for _ in range(3000)]
     assert np.mean(found) >= 0.77
 
 
