@@ -173,9 +173,9 @@ def set_score(r: dict) -> dict | None:
     holds both), `holds` (an explanation names the injected effects, maybe with others),
     `decisive` (single: every explanation names the injected effect and no other),
     `decisive_wrong` (single: every explanation names the same catalogue entries, and they
-    are not the injected effect), `alarm` (clean, out of catalogue: an explanation names an entry) and `best` (the
-    best explanation's first effect as a verdict: a probe is `unexplained`, none `none`).
-    `None` without a set."""
+    are not the injected effect), `alarm` (clean, out of catalogue: an explanation names an
+    entry) and `best` (the best explanation's first effect as a verdict: a probe is
+    `unexplained`, none `none`). `None` without a set."""
     kept = r.get("confidence_set")
     if not kept:
         return None
