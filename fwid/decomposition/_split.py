@@ -23,6 +23,8 @@ from ._filters import _concrete, check_cutoff, lowpass
 # Columns carried through untouched: time, and the measured flapping frequency (an input of the
 # flapping model, Section V.A, not a signal to be split).
 SKIPPED = ("t", "f")
+#: Butterworth order of the split between the cycle-averaged and the flapping part.
+SPLIT_ORDER = 6
 
 
 class Decomposition(eqx.Module):
@@ -74,7 +76,7 @@ def decompose(
     noise_cutoff: float | Float[ArrayLike, ""] | None = 40.0,
     split_cutoff: float | Float[ArrayLike, ""] = 5.0,
     noise_order: int = 4,
-    split_order: int = 6,
+    split_order: int = SPLIT_ORDER,
     skip: Sequence[str] = SKIPPED,
     pad: str = "hybrid",
 ) -> Decomposition:

@@ -42,11 +42,11 @@ import numpy as np
 from ..data import Flight
 from ..identification import get_model
 from ..models import GreyBoxModel
-from ._catalogue import actuator_filter, filter_text, frequency_deviation
+from ._catalogue import acting, actuator_filter, filter_text, frequency_deviation
 from ._catalogue.nonlinear_aero import Terms
 from ._catalogue.unsteady_aero import Lagging, lagging, quasi_steady
 from ._probes import ATTITUDE, elapsed
-from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, cycle_averaged, other
+from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, cycle_averaged, measured, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
 IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
@@ -189,7 +189,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     state_index = {s: k for k, s in enumerate(base.states)}
     ctrl = AXIS_INPUT[axis]
     control = ctrl
-    shift = None  # (kind, tau) applied to the control column
+    shift = None  # the servo (an actuator-dynamics member) or ("lead", T) of the control
     extra_inputs: list[str] = []
     terms: list[tuple] = []  # (suffix, kind, indices, loads, basis) (`Augmented`)
     left_out = []
@@ -205,7 +205,7 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
 
     for name, variant in effects:
         if name in ("actuator-dynamics", "time-offset"):
-            shift = variant if name == "actuator-dynamics" else ("delay", -float(variant))
+            shift = variant if name == "actuator-dynamics" else ("lead", float(variant))
             control = f"{ctrl}_eff"
         elif name == "unsteady-aero":
             if not isinstance(variant, Lagging):  # no member made for flights: no form
@@ -252,9 +252,11 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
         new = {k: g(flight) for k, g in columns.items()}
         for g in groups:
             new.update(g(flight))
-        if shift is not None:
+        if shift is not None and shift[0] == "lead":  # the logged column's lead (linear)
             slow = cycle_averaged(flight, (ctrl,), cutoff)[ctrl]
-            new[control] = actuator_filter(slow, flight.dt, shift)
+            new[control] = actuator_filter(slow, flight.dt, ("delay", -shift[1]))
+        elif shift is not None:  # the servo on the deflection as measured, then split
+            new[control] = acting(measured(flight, ctrl, cutoff), flight.dt, cutoff, shift)
         return flight.with_columns(**new) if new else flight
 
     return model, prepare, left_out

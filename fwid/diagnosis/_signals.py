@@ -10,7 +10,8 @@ import numpy as np
 
 from .._errors import DiagnosisWarning, ExcitationError, InputError
 from ..data import Flight
-from ..decomposition import decompose, flapping_phase
+from ..decomposition import decompose, flapping_phase, lowpass
+from ..decomposition._split import SPLIT_ORDER
 
 #: Loads of each axis and the cycle-averaged signals their linear model uses (Eqs. 2-6).
 AXIS_LOADS = {"lon": ("X", "Z", "M"), "lat": ("Y", "L", "N")}
@@ -39,6 +40,7 @@ class Signals:
       one of `BANDS`: `"averaged"` (below the split) and `"flapping"` (the harmonics).
     - `phase`: the flapping phase `int 2 pi f dt` (drives Eq. 12).
     - `manoeuvre`: True from the first input on.
+    - `cutoff`: the split [Hz] (`averaged` splits another signal as the loads were).
     """
 
     name: str
@@ -51,6 +53,7 @@ class Signals:
     fast: dict[str, np.ndarray]
     loads: dict[str, dict[str, np.ndarray]]
     manoeuvre: np.ndarray
+    cutoff: float = 5.0
 
     @property
     def n(self) -> int:
@@ -75,7 +78,23 @@ class Signals:
             fast={k: v[s] for k, v in self.fast.items()},
             loads={b: {k: v[s] for k, v in d.items()} for b, d in self.loads.items()},
             manoeuvre=self.manoeuvre[s],
+            cutoff=self.cutoff,
         )
+
+    def measured(self, name: str) -> np.ndarray:
+        """The perturbation `name` below the noise filter, both parts together (`slow` plus
+        `fast`; zeros when the flight lacks it): the signal as measured, before the split."""
+        zero = np.zeros(self.n)
+        return self.slow.get(name, zero) + self.fast.get(name, zero)
+
+
+
+def averaged(x: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
+    """The cycle-averaged part of `x` by the split's own low-pass (Section III.B,
+    `fwid.decomposition.decompose`): what the loads' averaged part holds of a load that `x`
+    drives, for a signal made from the measured ones (a servo's output) rather than
+    measured itself."""
+    return np.asarray(lowpass(np.asarray(x, float), dt, cutoff, order=SPLIT_ORDER))
 
 
 SLOW = ("u", "w", "q", "theta", "v", "p", "r", "phi", "de", "dr", "f")
@@ -113,7 +132,15 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
         fast=fast,
         loads=loads,
         manoeuvre=manoeuvre,
+        cutoff=cutoff,
     )
+
+
+def measured(flight: Flight, name: str, cutoff: float = 5.0) -> np.ndarray:
+    """The whole flight's perturbation `name` below the noise filter, both parts of the
+    split together (what `Signals.measured` holds of it, before the edges are dropped)."""
+    parts = decompose({name: flight[name]}, flight.dt, split_cutoff=cutoff)
+    return np.asarray(parts.averaged[name] + parts.flapping[name]) - flight.trim_value(name)
 
 
 def cycle_averaged(flight: Flight, names: Sequence[str], cutoff: float = 5.0

@@ -28,6 +28,7 @@ from ._effect import base_columns as base_columns
 from ._effect import slow_of as slow_of
 from ._filters import lagged as lagged
 from .actuator_dynamics import ACTUATOR_FILTERS as ACTUATOR_FILTERS
+from .actuator_dynamics import acting as acting
 from .actuator_dynamics import actuator_filter as actuator_filter
 from .actuator_dynamics import filter_text as filter_text
 from .flap_frequency import frequency_deviation as frequency_deviation

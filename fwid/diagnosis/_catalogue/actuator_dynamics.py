@@ -21,8 +21,8 @@ import dataclasses
 
 import numpy as np
 
-from .._signals import AXIS_INPUT, Signals
-from ._effect import Effect, axis_of, slow_of
+from .._signals import AXIS_INPUT, Signals, averaged
+from ._effect import Effect, axis_of
 from ._filters import backlash, lagged, second_order, stepped
 
 #: Time constants / delays [s] of the first-order members.
@@ -119,21 +119,32 @@ def filter_text(variant: tuple) -> str:
                                   f"{p[1]:g} s falling"}[kind]()
 
 
+def acting(measured: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np.ndarray:
+    """The acting deflection's cycle-averaged part: the servo `variant` acts on the
+    deflection perturbation as measured (both parts, `Signals.measured`), and its output is
+    split as the loads it drives were (`_signals.averaged`, below `cutoff` [Hz]). A nonlinear
+    servo does not commute with the split: a direction-dependent lag or a rate limit on the
+    cycle-averaged deflection, whose steps the split has smoothed, is not the servo on the
+    steps."""
+    return averaged(actuator_filter(measured, dt, variant), dt, cutoff)
+
+
 def _columns(s: Signals, load, variant, h, dh):
-    return actuator_filter(slow_of(s, AXIS_INPUT[axis_of(load)]), s.dt, variant)[:, None]
+    return acting(s.measured(AXIS_INPUT[axis_of(load)]), s.dt, s.cutoff, variant)[:, None]
 
 
 def _bind(effect: Effect, engine, idx) -> Effect:
     """The members with their nonlinearities sized on the fitting units' largest deflection
     of the manoeuvred axis's control (its 99th percentile of `|d|`), their rate limits on its
-    fastest rate (the 99th percentile of `|d'|`, the cycle-averaged deflection's); members
-    that cannot be sized (a control that never moves) go."""
+    fastest rate (the 99th percentile of `|d'|`), both of the deflection as measured, which
+    the servo acts on (`_columns`); members that cannot be sized (a control that never
+    moves) go."""
     axis = axis_of(engine.own[0]) if engine.own else "lon"
     units = [engine.units[i].signals for i in idx
              if AXIS_INPUT[axis] in engine.units[i].signals.slow]
-    d = [np.abs(s.slow[AXIS_INPUT[axis]]) for s in units]
-    rates = [np.abs(np.diff(s.slow[AXIS_INPUT[axis]])) / s.dt for s in units
-             if len(s.slow[AXIS_INPUT[axis]]) > 1]
+    d = [np.abs(s.measured(AXIS_INPUT[axis])) for s in units]
+    rates = [np.abs(np.diff(s.measured(AXIS_INPUT[axis]))) / s.dt for s in units
+             if s.n > 1]
     largest = float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
     scale = dict.fromkeys(NONLINEAR, largest)
     scale["rate-limit"] = float(np.percentile(np.concatenate(rates), 99.0)) if rates else 0.0
