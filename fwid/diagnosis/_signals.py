@@ -41,6 +41,8 @@ class Signals:
     - `phase`: the flapping phase `int 2 pi f dt` (drives Eq. 12).
     - `manoeuvre`: True from the first input on.
     - `cutoff`: the split [Hz] (`averaged` splits another signal as the loads were).
+    - `whole`, `edge`: the controls as measured over the whole flight, before the `edge`
+      samples at each end were dropped (`split_of`); `None` for a block.
     """
 
     name: str
@@ -54,6 +56,8 @@ class Signals:
     loads: dict[str, dict[str, np.ndarray]]
     manoeuvre: np.ndarray
     cutoff: float = 5.0
+    whole: dict[str, np.ndarray] | None = None
+    edge: int = 0
 
     @property
     def n(self) -> int:
@@ -86,6 +90,14 @@ class Signals:
         `fast`; zeros when the flight lacks it): the signal as measured, before the split."""
         zero = np.zeros(self.n)
         return self.slow.get(name, zero) + self.fast.get(name, zero)
+
+    def split_of(self, name: str, fn) -> np.ndarray:
+        """The cycle-averaged part of `fn(control)`, `fn` a causal filter of the control
+        `name` as measured (a servo), computed over the whole flight and split as the loads
+        were (`averaged`), then cut to this flight's samples as they were: the same edges as
+        the loads, where filtering the cut signal again would not be. A whole flight only."""
+        whole = self.whole.get(name, np.zeros(self.n + 2 * self.edge))
+        return averaged(fn(whole), self.dt, self.cutoff)[self.edge:self.edge + self.n]
 
 
 
@@ -133,6 +145,9 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
         loads=loads,
         manoeuvre=manoeuvre,
         cutoff=cutoff,
+        whole={c: np.asarray(parts.averaged[c] + parts.flapping[c] - flight.trim_value(c))
+               for c in ("de", "dr") if c in names},
+        edge=keep.start,
     )
 
 

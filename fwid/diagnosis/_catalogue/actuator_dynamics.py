@@ -130,7 +130,8 @@ def acting(measured: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np
 
 
 def _columns(s: Signals, load, variant, h, dh):
-    return acting(s.measured(AXIS_INPUT[axis_of(load)]), s.dt, s.cutoff, variant)[:, None]
+    return s.split_of(AXIS_INPUT[axis_of(load)],
+                      lambda d: actuator_filter(d, s.dt, variant))[:, None]
 
 
 def _bind(effect: Effect, engine, idx) -> Effect:

@@ -110,7 +110,7 @@ def _signals(slow, fast, dt=0.01):
     n = len(slow)
     fields = {f.name: None for f in dataclasses.fields(Signals)}
     fields.update(name="x", t=np.arange(n) * dt, dt=dt, slow={"de": slow}, fast={"de": fast},
-                  cutoff=5.0)
+                  cutoff=5.0, whole={"de": slow + fast}, edge=0)
     return Signals(**fields)
 
 
