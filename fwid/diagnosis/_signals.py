@@ -100,7 +100,6 @@ class Signals:
         return averaged(fn(whole), self.dt, self.cutoff)[self.edge:self.edge + self.n]
 
 
-
 def averaged(x: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
     """The cycle-averaged part of `x` by the split's own low-pass (Section III.B,
     `fwid.decomposition.decompose`): what the loads' averaged part holds of a load that `x`
@@ -145,17 +144,20 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
         loads=loads,
         manoeuvre=manoeuvre,
         cutoff=cutoff,
-        whole={c: np.asarray(parts.averaged[c] + parts.flapping[c] - flight.trim_value(c))
-               for c in ("de", "dr") if c in names},
+        whole={c: _both(parts, flight, c) for c in AXIS_INPUT.values() if c in names},
         edge=keep.start,
     )
+
+
+def _both(parts, flight: Flight, name: str) -> np.ndarray:
+    """Both parts of `name` in the decomposition `parts` of `flight`, less its trim."""
+    return np.asarray(parts.averaged[name] + parts.flapping[name]) - flight.trim_value(name)
 
 
 def measured(flight: Flight, name: str, cutoff: float = 5.0) -> np.ndarray:
     """The whole flight's perturbation `name` below the noise filter, both parts of the
     split together (what `Signals.measured` holds of it, before the edges are dropped)."""
-    parts = decompose({name: flight[name]}, flight.dt, split_cutoff=cutoff)
-    return np.asarray(parts.averaged[name] + parts.flapping[name]) - flight.trim_value(name)
+    return _both(decompose({name: flight[name]}, flight.dt, split_cutoff=cutoff), flight, name)
 
 
 def cycle_averaged(flight: Flight, names: Sequence[str], cutoff: float = 5.0
