@@ -95,7 +95,10 @@ class Signals:
         """The cycle-averaged part of `fn(control)`, `fn` a causal filter of the control
         `name` as measured (a servo), computed over the whole flight and split as the loads
         were (`averaged`), then cut to this flight's samples as they were: the same edges as
-        the loads, where filtering the cut signal again would not be. A whole flight only."""
+        the loads, where filtering the cut signal again would not be. Without the whole
+        record (`whole` None: a block, or signals made by hand) the samples held are used."""
+        if self.whole is None:
+            return averaged(fn(self.measured(name)), self.dt, self.cutoff)
         whole = self.whole.get(name, np.zeros(self.n + 2 * self.edge))
         return averaged(fn(whole), self.dt, self.cutoff)[self.edge:self.edge + self.n]
 
