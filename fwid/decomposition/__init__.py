@@ -18,5 +18,6 @@ from ._frequency import flapping_phase as flapping_phase
 from ._split import Decomposition as Decomposition
 from ._split import cycle_averaged as cycle_averaged
 from ._split import decompose as decompose
+from ._split import SPLIT_ORDER as SPLIT_ORDER
 from ._split import edge_samples as edge_samples
 from ._split import flapping_part as flapping_part

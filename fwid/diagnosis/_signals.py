@@ -10,8 +10,7 @@ import numpy as np
 
 from .._errors import DiagnosisWarning, ExcitationError, InputError
 from ..data import Flight
-from ..decomposition import decompose, flapping_phase, lowpass
-from ..decomposition._split import SPLIT_ORDER
+from ..decomposition import SPLIT_ORDER, decompose, flapping_phase, lowpass
 
 #: Loads of each axis and the cycle-averaged signals their linear model uses (Eqs. 2-6).
 AXIS_LOADS = {"lon": ("X", "Z", "M"), "lat": ("Y", "L", "N")}
@@ -42,7 +41,7 @@ class Signals:
     - `manoeuvre`: True from the first input on.
     - `cutoff`: the split [Hz] (`averaged` splits another signal as the loads were).
     - `whole`, `edge`: the controls as measured over the whole flight, before the `edge`
-      samples at each end were dropped (`split_of`); `None` for a block.
+      samples at each end were dropped (`over_whole`); `None` for a block.
     """
 
     name: str
@@ -91,16 +90,16 @@ class Signals:
         zero = np.zeros(self.n)
         return self.slow.get(name, zero) + self.fast.get(name, zero)
 
-    def split_of(self, name: str, fn) -> np.ndarray:
-        """The cycle-averaged part of `fn(control)`, `fn` a causal filter of the control
-        `name` as measured (a servo), computed over the whole flight and split as the loads
-        were (`averaged`), then cut to this flight's samples as they were: the same edges as
-        the loads, where filtering the cut signal again would not be. Without the whole
-        record (`whole` None: a block, or signals made by hand) the samples held are used."""
+    def over_whole(self, name: str, fn) -> np.ndarray:
+        """`fn(control)`, `fn` a filter of the control `name` as measured (a servo, then the
+        split), computed over the whole flight, then cut to this flight's samples as they
+        were: the same edges as the loads, where filtering the cut signal would not be.
+        Without the whole record (`whole` None: a block, or signals made by hand) the
+        samples held are used."""
         if self.whole is None:
-            return averaged(fn(self.measured(name)), self.dt, self.cutoff)
+            return fn(self.measured(name))
         whole = self.whole.get(name, np.zeros(self.n + 2 * self.edge))
-        return averaged(fn(whole), self.dt, self.cutoff)[self.edge:self.edge + self.n]
+        return fn(whole)[self.edge:self.edge + self.n]
 
 
 def averaged(x: np.ndarray, dt: float, cutoff: float) -> np.ndarray:

@@ -130,8 +130,8 @@ def acting(measured: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np
 
 
 def _columns(s: Signals, load, variant, h, dh):
-    return s.split_of(AXIS_INPUT[axis_of(load)],
-                      lambda d: actuator_filter(d, s.dt, variant))[:, None]
+    return s.over_whole(AXIS_INPUT[axis_of(load)],
+                        lambda d: acting(d, s.dt, s.cutoff, variant))[:, None]
 
 
 def _bind(effect: Effect, engine, idx) -> Effect:
@@ -143,9 +143,9 @@ def _bind(effect: Effect, engine, idx) -> Effect:
     axis = axis_of(engine.own[0]) if engine.own else "lon"
     units = [engine.units[i].signals for i in idx
              if AXIS_INPUT[axis] in engine.units[i].signals.slow]
-    d = [np.abs(s.measured(AXIS_INPUT[axis])) for s in units]
-    rates = [np.abs(np.diff(s.measured(AXIS_INPUT[axis]))) / s.dt for s in units
-             if s.n > 1]
+    measured = [(s.measured(AXIS_INPUT[axis]), s.dt) for s in units]
+    d = [np.abs(x) for x, _ in measured]
+    rates = [np.abs(np.diff(x)) / dt for x, dt in measured if len(x) > 1]
     largest = float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
     scale = dict.fromkeys(NONLINEAR, largest)
     scale["rate-limit"] = float(np.percentile(np.concatenate(rates), 99.0)) if rates else 0.0
