@@ -127,6 +127,19 @@ def test_hybrid_edges_follow_the_slow_part_under_a_large_oscillation():
         lowpass(x, DT, 5.0, pad="zero")
 
 
+def test_hybrid_end_value_is_the_slow_part_s_level_not_the_end_sample():
+    # A record's last samples carry an error of their own (loads from tracked motion are
+    # one-sided there): the low-passed value at the end follows the slow part's level near
+    # the end, not the end sample, while a slow signal's curvature costs little.
+    slow = 1.0 + 0.5 * np.sin(2 * np.pi * 0.4 * T + 0.3) + 0.2 * T
+    bump = np.zeros_like(T)
+    bump[-3:] = [0.3, 0.6, 1.0]
+    end = float(np.asarray(lowpass(slow + bump, DT, 5.0, order=6))[-1]) - slow[-1]
+    odd = float(np.asarray(lowpass(slow + bump, DT, 5.0, order=6, pad="odd"))[-1]) - slow[-1]
+    assert abs(end) < 0.35 * abs(odd)
+    assert abs(end) < 0.3
+
+
 def test_channels_jit_vmap():
     x = np.stack([_test_signal(s) for s in range(3)])
     y = lowpass(x, DT, 5.0)
