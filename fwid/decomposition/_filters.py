@@ -154,13 +154,6 @@ _PADS = ("hybrid", "odd", "even")
 _HYBRID_PASSES = 6
 
 
-def _odd(x):
-    n = x.shape[-1]
-    head = 2 * x[..., :1] - x[..., n - 1 : 0 : -1]
-    tail = 2 * x[..., -1:] - x[..., -2::-1]
-    return jnp.concatenate([head, x, tail], axis=-1)
-
-
 #: Time constant of the end level's weights, in periods of the cut-off: `T = END_LEVEL / f_c`.
 END_LEVEL = 0.1
 
@@ -183,6 +176,11 @@ def _odd_about(x, head, tail):
     n = x.shape[-1]
     return jnp.concatenate([2 * head - x[..., n - 1 : 0 : -1], x, 2 * tail - x[..., -2::-1]],
                            axis=-1)
+
+
+def _odd(x):
+    """Odd reflection about the end samples (`filtfilt`'s extension)."""
+    return _odd_about(x, x[..., :1], x[..., -1:])
 
 
 def _even(x):
