@@ -246,17 +246,23 @@ class Engine:
         (with fewer than three units, the training error). Of members that tie, the first
         (the variants are listed simplest first): a rate limit that never binds is a plain
         lag, and must not be reported as a rate limit. Members of different sizes are
-        weighed by the one-standard-error rule (`one_standard_error`)."""
+        weighed by the one-standard-error rule (`one_standard_error`); a family that can
+        `refine` its chosen member then tries the members near it the same way."""
         if len(effect.variants) == 1:
             return effect.variants[0]
         chans = [ch for ch in self.channels(effect.band) if ch[0] in self.allowed(effect)
                  and (loads is None or ch[0] in loads)]
         if effect.sized and len(idx) >= 3:
-            loo = [[self.loo_errors(idx, ch, model + ((effect, v),)) for ch in chans]
-                   for v in effect.variants]
-            return effect.variants[one_standard_error(
-                [sum(e / sigma2[ch] for (e, _), ch in zip(m, chans)) for m in loo],
-                [sum(k for _, k in m) + numbers_of(v) for m, v in zip(loo, effect.variants)])]
+            def pick(variants):
+                loo = [[self.loo_errors(idx, ch, model + ((effect, v),)) for ch in chans]
+                       for v in variants]
+                return variants[one_standard_error(
+                    [sum(e / sigma2[ch] for (e, _), ch in zip(m, chans)) for m in loo],
+                    [sum(k for _, k in m) + numbers_of(v) for m, v in zip(loo, variants)])]
+
+            best = pick(effect.variants)
+            near = tuple(v for v in effect.refine(best) if v != best) if effect.refine else ()
+            return pick((best,) + near) if near else best
         costs = [sum(self.fit(idx, ch, model + ((effect, v),))[1] / sigma2[ch]
                      for ch in chans) for v in effect.variants]
         return effect.variants[simplest_best(costs)]

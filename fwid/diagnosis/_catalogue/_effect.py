@@ -77,6 +77,9 @@ class Effect:
     #: residual (`_disturbance.whitens`), as it does a probe.
     filters_states: bool = False
     bind: Callable | None = dataclasses.field(default=None, repr=False, compare=False)
+    #: `refine(member)`: members near a chosen one, tried after it (one of its numbers on a
+    #: finer grid), for a `sized` family whose grid is a product too large to try whole.
+    refine: Callable | None = dataclasses.field(default=None, repr=False, compare=False)
 
     def bound(self, engine, idx) -> Effect:
         """The effect made for the fitting units `idx` of `engine` (`bind`), or itself."""

@@ -10,7 +10,8 @@ linkage, the one with memory). The nonlinearities' sizes are fractions of the fi
 flights' largest deflection, the rate limits fractions of their fastest deflection rate
 (`bind`): a limit only shows where the flights reach it, whatever the surface, its units
 or the manoeuvre's size. The member is chosen by leave-one-flight-out error on
-the fitting flights, as `nonlinear-aero`'s size. The grids are generic (servo bandwidths of
+the fitting flights, as `nonlinear-aero`'s size; a nonlinear or rate-limited member's lag is
+then refined on the first-order members' grid (`refine`). The grids are generic (servo bandwidths of
 a few to tens of Hz; limits, play and rate limits as fractions of what the flights reach),
 not a simulator's values.
 """
@@ -30,7 +31,8 @@ LAGS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2)
 #: The static nonlinearities of the Hammerstein / Wiener members and their sizes, as
 #: fractions of the largest deflection (`bind` makes them radians).
 NONLINEAR = {"saturation": (0.5, 0.75), "dead-band": (0.1, 0.2), "backlash": (0.1, 0.2)}
-#: Their lags [s].
+#: Their lags [s]: the grid tried with every size; the chosen member's lag is then refined
+#: on the first-order members' grid up to 0.1 s (`refine`).
 NONLINEAR_LAGS = (0.02, 0.05)
 #: The rate limits, as fractions of the fastest deflection rate (`bind` makes them rad/s),
 #: and their lags [s].
@@ -134,6 +136,20 @@ def _columns(s: Signals, load, variant, h, dh):
                         lambda d: acting(d, s.dt, s.cutoff, variant))[:, None]
 
 
+#: The lags a nonlinear or rate-limited member's lag is refined on [s].
+REFINED_LAGS = LAGS[:6]
+
+
+def refine(variant: tuple) -> tuple:
+    """The members like `variant` with its lag on `REFINED_LAGS`: a servo's lag and its
+    nonlinearity are found together, and the lag a coarse grid leaves over is what a second
+    family (`unsteady-aero`'s lag) would take up. Linear members are on that grid already."""
+    kind, *p = variant
+    if kind == "rate-limit" or kind in NONLINEAR:
+        return tuple((kind, t, *p[1:]) for t in REFINED_LAGS)
+    return ()
+
+
 def _bind(effect: Effect, engine, idx) -> Effect:
     """The members with their nonlinearities sized on the fitting units' largest deflection
     of the manoeuvred axis's control (its 99th percentile of `|d|`), their rate limits on its
@@ -169,4 +185,5 @@ EFFECT = Effect(
     replaces_input=True,
     sized=True,
     bind=_bind,
+    refine=refine,
 )

@@ -166,3 +166,31 @@ def test_a_nonlinear_servo_acts_on_the_measured_deflection_before_the_split():
     new, old = misfit(_columns(base, "M", servo, None, None)[:, 0]), misfit(
         actuator_filter(base.slow["de"], dt, servo))
     assert new < 0.02 and old > 4 * new  # 1.0 % against 5.9 %
+
+
+def test_a_lagged_saturating_servo_is_named_alone(tmp_path):
+    # The simulator's rudder saturates smoothly behind a 0.03 s lag. With the nonlinear
+    # members' lags on two values (0.02, 0.05 s), the lag the nearest member left over was
+    # taken up by `unsteady-aero` beside it; with the chosen member's lag refined on the
+    # first-order members' grid the servo is named alone.
+    import fwid
+    from fwid.synth import write_flights
+
+    kw = dict(effect="actuator-dynamics", form="saturation", noise=1.0, duration=5.0, rate=200.0)
+    write_flights(tmp_path / "fit", 6, "lat", seed=0, **kw)
+    write_flights(tmp_path / "test", 6, "lat", seed=500, **kw)
+    d = fwid.diagnose(fwid.load_flights(tmp_path / "fit"), fwid.load_flights(tmp_path / "test"),
+                      axis="lat", simulation=False, process_noise=False)
+    assert d.verdict == "actuator-dynamics"
+    assert [x["explanation"] for x in d.confidence_set] == [["actuator-dynamics"]]
+    assert "tau = 0.03 s" in d.effects[0]["variant"]
+
+
+def test_refine_moves_only_the_lag_of_a_nonlinear_or_rate_limited_member():
+    from fwid.diagnosis._catalogue.actuator_dynamics import REFINED_LAGS, refine
+
+    near = refine(("saturation", 0.02, 0.2, "before"))
+    assert [v[1] for v in near] == list(REFINED_LAGS)
+    assert all(v[0] == "saturation" and v[2:] == (0.2, "before") for v in near)
+    assert [v[2] for v in refine(("rate-limit", 0.05, 3.0))] == [3.0] * len(REFINED_LAGS)
+    assert refine(("lag", 0.05)) == () and refine(("second-order", 8.0, 0.5)) == ()
