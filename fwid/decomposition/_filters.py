@@ -35,7 +35,7 @@ removed by the complementary high-pass, so that step adds no error of its own. T
   of one and is linear in `x`, so everything below still holds. The odd reflection of `s` turns
   about the slow part's *level* at each end, not its end sample: the straight line fitted to the
   samples near the end with weights `exp(-(time from the end) / T)`, `T = 0.1 / cutoff` (20 ms
-  at 5 Hz), read at the end (`_end_levels`). Turning about the end sample would carry that
+  at 5 Hz), read at the end (`_end_weights`). Turning about the end sample would carry that
   sample's whole error into the low-passed value there; a record's ends are where loads
   reconstructed from tracked motion are least certain (one-sided data). `T` is the longest
   that keeps a slow signal's curvature from costing more at the ends (a 0.4 Hz sine of
@@ -158,16 +158,19 @@ _HYBRID_PASSES = 6
 END_LEVEL = 0.1
 
 
-def _end_levels(x, dt, cutoff):
-    """The slow part's level at each end: the straight line fitted to the samples near that
-    end by least squares with weights `exp(-(time from the end) / T)`, `T = END_LEVEL / f_c`,
-    read at the end. Linear in `x`; a record's one noisy end sample does not set it."""
-    n = x.shape[-1]
-    k = jnp.arange(n, dtype=x.dtype) * dt
+def _end_weights(n: int, dt, cutoff, dtype):
+    """The weights `a` (`(n,)`, from the end inwards) that read a record's level at its end,
+    `sum(a x)`: the straight line fitted to the samples near the end by least squares with
+    weights `exp(-(time from the end) / T)`, `T = END_LEVEL / f_c`, read at the end."""
+    k = jnp.arange(n, dtype=dtype) * dt
     w = jnp.exp(-k * cutoff / END_LEVEL)
     s0, s1, s2 = jnp.sum(w), jnp.sum(w * k), jnp.sum(w * k * k)
-    # the weights that read the fitted line at k = 0: (s2 - s1 k) w / (s0 s2 - s1^2)
-    a = (s2 - s1 * k) * w / (s0 * s2 - s1 * s1)
+    return (s2 - s1 * k) * w / (s0 * s2 - s1 * s1)
+
+
+def _end_levels(x, a):
+    """The slow part's level at each end of `x` (weights `a`, `_end_weights`). Linear in
+    `x`; a record's one noisy end sample does not set it."""
     return jnp.sum(x * a, -1, keepdims=True), jnp.sum(x[..., ::-1] * a, -1, keepdims=True)
 
 
@@ -210,9 +213,10 @@ def _zero_phase_lowpass(x, dt, cutoff, order: int, prewarp: bool, pad: str):
         return filt(_even(x))
     if pad == "odd":
         return filt(_odd(x))
-    s = filt(_odd_about(x, *_end_levels(x, dt, cutoff)))
+    a = _end_weights(n, dt, cutoff, x.dtype)
+    s = filt(_odd_about(x, *_end_levels(x, a)))
     return jax.lax.fori_loop(
-        0, _HYBRID_PASSES, lambda _, s: filt(_odd_about(s, *_end_levels(s, dt, cutoff)) + _even(x - s)), s
+        0, _HYBRID_PASSES, lambda _, s: filt(_odd_about(s, *_end_levels(s, a)) + _even(x - s)), s
     )
 
 
