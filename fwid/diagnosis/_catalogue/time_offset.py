@@ -9,8 +9,11 @@ from .._signals import AXIS_INPUT, Signals
 from ._effect import Effect, axis_of, slow_of
 from ._filters import lagged
 
-#: Leads [s] tried.
-LEADS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
+#: Leads [s] tried. The 5 and 7.5 ms ones (as `actuator-dynamics`' `SHORT`): a lead the grid
+#: misses by much leaves a remainder of the step response that a second family takes up
+#: (`unsteady-aero`'s delay); a 6 ms offset between 10 ms and nothing read as
+#: `unsteady-aero` beside `time-offset`.
+LEADS = (0.0025, 0.005, 0.0075, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
 
 
 def _columns(s: Signals, load, lead, h, dh):
