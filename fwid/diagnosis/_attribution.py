@@ -193,6 +193,10 @@ class Engine:
                 if e.replaces_input:  # the control is the last base column; the acting
                     # deflection is the same for every load of the axis: made once
                     key_in = (i, e.name, v, axis_of(load))
+                    if key_in not in self._acting and e.all_columns and v in e.variants:
+                        cols = e.all_columns(s, load, e.variants)
+                        for k, w in enumerate(e.variants):
+                            self._acting[(i, e.name, w, axis_of(load))] = cols[:, k:k + 1]
                     if key_in not in self._acting:
                         self._acting[key_in] = e.columns(s, load, v, h, dh)
                     g = np.concatenate([g[:, :-1], self._acting[key_in]], axis=1)

@@ -80,6 +80,11 @@ class Effect:
     #: `refine(member)`: members near a chosen one, tried after it (one of its numbers on a
     #: finer grid), for a `sized` family whose grid is a product too large to try whole.
     refine: Callable | None = dataclasses.field(default=None, repr=False, compare=False)
+    #: `all_columns(signals, load, variants)`: the column of each member at once, `(n,
+    #: len(variants))`, for a family that `replaces_input` whose members are cheaper made
+    #: together (a servo's outputs split in one call: `Engine.design` asks for all members of
+    #: a flight the first time it needs one).
+    all_columns: Callable | None = dataclasses.field(default=None, repr=False, compare=False)
 
     def bound(self, engine, idx) -> Effect:
         """The effect made for the fitting units `idx` of `engine` (`bind`), or itself."""

@@ -125,19 +125,30 @@ def filter_text(variant: tuple) -> str:
                                   f"{p[1]:g} s falling"}[kind]()
 
 
-def acting(measured: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np.ndarray:
-    """The acting deflection's cycle-averaged part: the servo `variant` acts on the
-    deflection perturbation as measured (both parts, `Signals.measured`), and its output is
-    split as the loads it drives were (`_signals.averaged`, below `cutoff` [Hz]). A nonlinear
-    servo does not commute with the split: a direction-dependent lag or a rate limit on the
+def acting_all(measured: np.ndarray, dt: float, cutoff: float, variants) -> np.ndarray:
+    """The acting deflection's cycle-averaged part under each servo of `variants`, `(n,
+    len(variants))`: the servo acts on the deflection perturbation as measured (both parts,
+    `Signals.measured`), and its output is split as the loads it drives were
+    (`_signals.averaged`, below `cutoff` [Hz]; all outputs in one call). A nonlinear servo
+    does not commute with the split: a direction-dependent lag or a rate limit on the
     cycle-averaged deflection, whose steps the split has smoothed, is not the servo on the
     steps."""
-    return averaged(actuator_filter(measured, dt, variant), dt, cutoff)
+    return averaged(np.stack([actuator_filter(measured, dt, v) for v in variants]), dt,
+                    cutoff).T
+
+
+def acting(measured: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np.ndarray:
+    """The acting deflection's cycle-averaged part under the servo `variant` (`acting_all`)."""
+    return acting_all(measured, dt, cutoff, (variant,))[:, 0]
+
+
+def _all_columns(s: Signals, load, variants) -> np.ndarray:
+    return s.over_whole(AXIS_INPUT[axis_of(load)],
+                        lambda d: acting_all(d, s.dt, s.cutoff, variants))
 
 
 def _columns(s: Signals, load, variant, h, dh):
-    return s.over_whole(AXIS_INPUT[axis_of(load)],
-                        lambda d: acting(d, s.dt, s.cutoff, variant))[:, None]
+    return _all_columns(s, load, (variant,))
 
 
 #: The lags a nonlinear or rate-limited member's lag is refined on [s].
@@ -187,6 +198,7 @@ EFFECT = Effect(
     _columns,
     ACTUATOR_FILTERS,
     replaces_input=True,
+    all_columns=_all_columns,
     sized=True,
     bind=_bind,
     refine=refine,

@@ -194,3 +194,13 @@ def test_refine_moves_only_the_lag_of_a_nonlinear_or_rate_limited_member():
     assert all(v[0] == "saturation" and v[2:] == (0.2, "before") for v in near)
     assert [v[2] for v in refine(("rate-limit", 0.05, 3.0))] == [3.0] * len(REFINED_LAGS)
     assert refine(("lag", 0.05)) == () and refine(("second-order", 8.0, 0.5)) == ()
+
+
+def test_every_member_s_acting_deflection_at_once_is_each_one_s():
+    from fwid.diagnosis._catalogue.actuator_dynamics import acting, acting_all
+
+    x = np.cumsum(np.random.default_rng(0).standard_normal(600)) * 0.01
+    every = acting_all(x, 0.005, 5.0, ACTUATOR_FILTERS)
+    assert every.shape == (600, len(ACTUATOR_FILTERS))
+    for k, v in enumerate(ACTUATOR_FILTERS):
+        np.testing.assert_allclose(every[:, k], acting(x, 0.005, 5.0, v), atol=1e-12)
