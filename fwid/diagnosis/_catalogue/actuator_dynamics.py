@@ -28,9 +28,9 @@ from ._filters import backlash, lagged, second_order, stepped
 
 #: Time constants / delays [s] of the first-order members.
 LAGS = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2)
-#: The shorter ones of the lag and delay members (below the other members' grid): a servo
-#: lag of 7.5 ms fitted at 10 ms left a remainder of the step response that `unsteady-aero`
-#: took up beside it (the same for `time-offset`'s leads).
+#: The lag and delay members' shortest times (below `LAGS`, down to half a sample at 200
+#: Hz), also `time-offset`'s shortest leads: a servo lag of 7.5 ms fitted at 10 ms left a
+#: remainder of the step response that `unsteady-aero` took up beside it.
 SHORT = (0.0025, 0.005, 0.0075)
 #: The static nonlinearities of the Hammerstein / Wiener members and their sizes, as
 #: fractions of the largest deflection (`bind` makes them radians).

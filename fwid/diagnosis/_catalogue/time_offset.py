@@ -8,12 +8,14 @@ from __future__ import annotations
 from .._signals import AXIS_INPUT, Signals
 from ._effect import Effect, axis_of, slow_of
 from ._filters import lagged
+from .actuator_dynamics import SHORT
 
-#: Leads [s] tried. The 5 and 7.5 ms ones (as `actuator-dynamics`' `SHORT`): a lead the grid
-#: misses by much leaves a remainder of the step response that a second family takes up
-#: (`unsteady-aero`'s delay); a 6 ms offset between 10 ms and nothing read as
-#: `unsteady-aero` beside `time-offset`.
-LEADS = (0.0025, 0.005, 0.0075, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
+#: Leads [s] tried, the shortest (`SHORT`) those of `actuator-dynamics`' delays: a late log
+#: and a late servo are one net shift of opposite sign. A lead the grid misses by much
+#: leaves a remainder of the step response that a second family takes up (`unsteady-aero`'s
+#: delay): a 6 ms offset, with 10 ms the shortest lead, read as `unsteady-aero` beside
+#: `time-offset`.
+LEADS = SHORT + (0.01, 0.02, 0.03, 0.05, 0.07, 0.1)
 
 
 def _columns(s: Signals, load, lead, h, dh):
