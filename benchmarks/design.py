@@ -303,8 +303,8 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             fly = functools.partial(_synth_flight, form=form)
             train = [fly(true, None, None, base + i, out, f"{tag}_tr{i}", strength)
                      for i in range(DISC_TRAIN)]
-            test = [fly(true, None, None, base + 10 + i, out, f"{tag}_te{i}",
-                                  strength) for i in range(DISC_TEST)]
+            test = [fly(true, None, None, base + 10 + i, out, f"{tag}_te{i}", strength)
+                    for i in range(DISC_TEST)]
             d0 = _verdict(train, test)
             before = judge(d0, true)
             row = {"true": true, "form": form, "intended_rival": rival, "strength": strength,
@@ -342,10 +342,8 @@ def run_discrimination(seeds, out: Path, log) -> dict:
             row["amplitude_used_rad"] = disc.limits["amplitude_used_rad"]
             row["distance_ratio_vs_3211"] = disc.to_json()["criterion"]["ratio"]
             row["reference_3211_unit_s"] = disc.limits["reference_3211_unit_s"]
-            new = fly(true, disc.t, disc.u, base + 20, out, f"{tag}_des", strength,
-                                added)
-            ctl = fly(true, disc.t, disc.u_3211, base + 20, out, f"{tag}_ctl",
-                                strength, added)
+            new = fly(true, disc.t, disc.u, base + 20, out, f"{tag}_des", strength, added)
+            ctl = fly(true, disc.t, disc.u_3211, base + 20, out, f"{tag}_ctl", strength, added)
             for key, flight in (("designed", new), ("3211", ctl)):
                 after = judge(_verdict(train + [flight], test), true)
                 row[f"verdict_{key}"] = after["verdict"]

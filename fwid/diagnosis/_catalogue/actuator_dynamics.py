@@ -11,7 +11,7 @@ flights' largest deflection, the rate limits fractions of their fastest deflecti
 (`bind`): a limit only shows where the flights reach it, whatever the surface, its units
 or the manoeuvre's size. The member is chosen by leave-one-flight-out error on
 the fitting flights, as `nonlinear-aero`'s size; a nonlinear or rate-limited member's lag is
-then refined on the first-order members' grid (`refine`). The grids are generic (servo bandwidths of
+then refined on `LAGS` up to 0.1 s (`refine`). The grids are generic (servo bandwidths of
 a few to tens of Hz; limits, play and rate limits as fractions of what the flights reach),
 not a simulator's values.
 """
@@ -36,7 +36,7 @@ SHORT = (0.0025, 0.005, 0.0075)
 #: fractions of the largest deflection (`bind` makes them radians).
 NONLINEAR = {"saturation": (0.5, 0.75), "dead-band": (0.1, 0.2), "backlash": (0.1, 0.2)}
 #: Their lags [s]: the grid tried with every size; the chosen member's lag is then refined
-#: on the first-order members' grid up to 0.1 s (`refine`).
+#: on `LAGS` up to 0.1 s (`refine`; `SHORT` is not part of that grid).
 NONLINEAR_LAGS = (0.02, 0.05)
 #: The rate limits, as fractions of the fastest deflection rate (`bind` makes them rad/s),
 #: and their lags [s].

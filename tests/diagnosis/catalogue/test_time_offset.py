@@ -3,10 +3,11 @@ from fwid.diagnosis._catalogue.time_offset import LEADS
 
 
 def test_short_leads_mirror_the_servo_s_short_delays():
-    # A servo's delay and a late log are one net shift of opposite sign: the grids agree.
-    assert LEADS[:len(SHORT)] == SHORT and min(LEADS) == min(SHORT) <= 0.0025
+    # A servo's delay and a late log are one net shift of opposite sign: every lead is a
+    # delay member too, and both grids reach down to half a sample at 200 Hz.
     delays = {v[1] for v in ACTUATOR_FILTERS if v[0] == "delay"}
-    assert set(LEADS) <= delays
+    assert set(LEADS) <= delays and set(SHORT) <= set(LEADS)
+    assert min(LEADS) == min(delays) <= 0.0025
 
 
 def _diagnose(tmp_path, effect, seed):
