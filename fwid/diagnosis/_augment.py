@@ -46,7 +46,7 @@ from ._catalogue import acting, actuator_filter, filter_text, frequency_deviatio
 from ._catalogue.nonlinear_aero import Terms
 from ._catalogue.unsteady_aero import Lagging, lagging, quasi_steady
 from ._probes import ATTITUDE, elapsed
-from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, cycle_averaged, measured, other
+from ._signals import AXIS_INPUT, AXIS_LOADS, AXIS_STATES, command, cycle_averaged, other
 
 #: Effects (catalogue and probes) that have a form inside the cycle-averaged EOM.
 IN_EOM = ("actuator-dynamics", "time-offset", "unsteady-aero", "flap-frequency",
@@ -175,11 +175,10 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
     """The `axis` model (`fwid.longitudinal`/`fwid.lateral`) with `effects` (`(name,
     variant)` pairs as the diagnosis selected them) inside its EOM.
 
-    The acting deflection is the cycle-averaged measured one (below `cutoff` Hz, as the
-    diagnosis fitted the filter on the loads) through the chosen filter: a rate limit or a
-    direction-dependent lag is not linear, so it must see the same signal in both places
-    (the flapping ripple of the raw column would saturate a rate limit that the
-    cycle-averaged deflection never reaches).
+    The acting deflection is the commanded one (`_signals.command`: as measured, less the
+    flapping ripple) through the chosen filter, then split below `cutoff` Hz, as the
+    diagnosis fitted the filter on the loads: a rate limit or a direction-dependent lag is
+    not linear, so it must see the same signal in both places.
 
     **Returns:** `(model, prepare, left_out)`: `prepare(flight)` adds the columns the model
     reads (the acting deflection), `left_out` the effects that have no cycle-averaged form.
@@ -255,8 +254,8 @@ def augment(axis: str, effects: Sequence[tuple[str, object]], cutoff: float = 5.
         if shift is not None and shift[0] == "lead":  # the logged column's lead (linear)
             slow = cycle_averaged(flight, (ctrl,), cutoff)[ctrl]
             new[control] = actuator_filter(slow, flight.dt, ("delay", -shift[1]))
-        elif shift is not None:  # the servo on the deflection as measured, then split
-            new[control] = acting(measured(flight, ctrl, cutoff), flight.dt, cutoff, shift)
+        elif shift is not None:  # the servo on the deflection as commanded, then split
+            new[control] = acting(command(flight, ctrl, cutoff), flight.dt, cutoff, shift)
         return flight.with_columns(**new) if new else flight
 
     return model, prepare, left_out

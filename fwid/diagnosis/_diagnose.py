@@ -329,7 +329,12 @@ def untracked(effects: list[dict], redness: float, tracking: set) -> tuple[int, 
     `redness_after` it left) stand: up to the first entry built on the states' dynamics
     (`tracking`) that leaves what it entered on about as red as before (`whitens`; from the
     baseline's `redness`): it tracked a disturbance that drove the states, and goes with what
-    came after it. Returns the count and, when one went, `{"effects", "redness_after"}`."""
+    came after it. Returns the count and, when one went, `{"effects", "redness_after"}`.
+    Where the baseline's residual is white (`redness < RED_MIN`) there is no disturbance to
+    track and all stand: an effect that takes the residual's higher frequencies (a lag
+    does) may leave it redder than it found it."""
+    if redness < RED_MIN:
+        return len(effects), None
     before = redness
     for k, row in enumerate(effects):
         if row["effect"] in tracking and not whitens(before, row["redness_after"]):
@@ -344,7 +349,9 @@ def adequate(kept: list[dict], scores: Scores, before: float, tracking: set,
     an entry the verdict found tracking it (`tracked`), and those holding an entry built on
     the states' dynamics or a probe (`tracking`) that do not whiten the residual (`whitens`,
     the verdict's test; each such row carries its `redness_after`); `before`: the baseline
-    residual's redness."""
+    residual's redness (white: no disturbance to track, all stay, as in `untracked`)."""
+    if before < RED_MIN:
+        return list(kept)
     out = []
     for row in kept:
         if tracked & set(row["explanation"]):

@@ -11,6 +11,7 @@ import numpy as np
 from .._errors import DiagnosisWarning, ExcitationError, InputError
 from ..data import Flight
 from ..decomposition import SPLIT_ORDER, decompose, flapping_phase, lowpass
+from ..models import fourier_regressors
 
 #: Loads of each axis and the cycle-averaged signals their linear model uses (Eqs. 2-6).
 AXIS_LOADS = {"lon": ("X", "Z", "M"), "lat": ("Y", "L", "N")}
@@ -40,8 +41,8 @@ class Signals:
     - `phase`: the flapping phase `int 2 pi f dt` (drives Eq. 12).
     - `manoeuvre`: True from the first input on.
     - `cutoff`: the split [Hz] (`averaged` splits another signal as the loads were).
-    - `whole`, `edge`: the controls as measured over the whole flight, before the `edge`
-      samples at each end were dropped (`over_whole`); `None` for a block.
+    - `whole`, `edge`: the controls as commanded (`commanded`) over the whole flight,
+      before the `edge` samples at each end were dropped (`over_whole`); `None` for a block.
     """
 
     name: str
@@ -90,16 +91,39 @@ class Signals:
         zero = np.zeros(self.n)
         return self.slow.get(name, zero) + self.fast.get(name, zero)
 
+    def commanded(self, name: str) -> np.ndarray:
+        """The control `name` as commanded: as measured (`measured`) less its flapping
+        ripple (`commanded`)."""
+        return commanded(self.measured(name), self.phase)
+
     def over_whole(self, name: str, fn) -> np.ndarray:
-        """`fn(control)`, `fn` a filter of the control `name` as measured (a servo, then the
-        split), computed over the whole flight, then cut to this flight's samples as they
-        were: the same edges as the loads, where filtering the cut signal would not be.
+        """`fn(control)`, `fn` a filter of the control `name` as commanded (a servo, then
+        the split), computed over the whole flight, then cut to this flight's samples as
+        they were: the same edges as the loads, where filtering the cut signal would not be.
         Without the whole record (`whole` None: a block, or signals made by hand) the
         samples held are used."""
         if self.whole is None:
-            return fn(self.measured(name))
+            return fn(self.commanded(name))
         whole = self.whole.get(name, np.zeros(self.n + 2 * self.edge))
         return fn(whole)[self.edge:self.edge + self.n]
+
+
+#: Harmonics of the flapping phase in a control surface's ripple (`commanded`).
+RIPPLE_HARMONICS = 3
+
+
+def commanded(x: np.ndarray, phase: np.ndarray) -> np.ndarray:
+    """A control surface's deflection `x` less its flapping ripple: the least-squares fit of
+    `RIPPLE_HARMONICS` harmonics of the flapping phase `phase` (Eq. 12's regressors, constant
+    amplitudes) removed. The ripple is the flapping wings' pull on the surface and its
+    linkage, locked to the wing beat, not what the servo was asked for (Section IV.A: the
+    deflections are cycle-averaged), so a servo (`actuator-dynamics`) acts on the rest; a
+    rate limit or a backlash fed the ripple as well would bind on every wing beat. Steps and
+    manoeuvres, not locked to the phase, keep their edges (a low-pass would smooth them)."""
+    x = np.asarray(x, dtype=float)
+    A = fourier_regressors(phase, RIPPLE_HARMONICS)
+    coef, *_ = np.linalg.lstsq(A - A.mean(axis=0), x - x.mean(), rcond=None)
+    return x - (A - A.mean(axis=0)) @ coef
 
 
 def averaged(x: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
@@ -146,7 +170,8 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
         loads=loads,
         manoeuvre=manoeuvre,
         cutoff=cutoff,
-        whole={c: _both(parts, flight, c) for c in AXIS_INPUT.values() if c in names},
+        whole={c: commanded(_both(parts, flight, c), phase) for c in AXIS_INPUT.values()
+               if c in names},
         edge=keep.start,
     )
 
@@ -156,10 +181,11 @@ def _both(parts, flight: Flight, name: str) -> np.ndarray:
     return np.asarray(parts.averaged[name] + parts.flapping[name]) - flight.trim_value(name)
 
 
-def measured(flight: Flight, name: str, cutoff: float = 5.0) -> np.ndarray:
-    """The whole flight's perturbation `name` below the noise filter, both parts of the
-    split together (what `Signals.measured` holds of it, before the edges are dropped)."""
-    return _both(decompose({name: flight[name]}, flight.dt, split_cutoff=cutoff), flight, name)
+def command(flight: Flight, name: str, cutoff: float = 5.0) -> np.ndarray:
+    """The whole flight's control `name` as commanded (`commanded`: below the noise filter,
+    both parts of the split less the flapping ripple), as `Signals.whole` holds it."""
+    both = _both(decompose({name: flight[name]}, flight.dt, split_cutoff=cutoff), flight, name)
+    return commanded(both, np.asarray(flapping_phase(np.asarray(flight["f"], float), flight.dt)))
 
 
 def cycle_averaged(flight: Flight, names: Sequence[str], cutoff: float = 5.0

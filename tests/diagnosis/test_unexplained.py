@@ -181,3 +181,25 @@ def test_an_entry_that_tracks_a_disturbance_goes_with_what_came_after_it():
     assert untracked(rows[1:], 4.0, {"unsteady-aero"})[0] == 0
     assert untracked(rows[1:], 8.0, {"unsteady-aero"}) == (1, None)  # whitened by 2.4x
     assert untracked(rows, 4.0, set()) == (2, None)  # none built on the states' dynamics
+    # a white baseline residual: no disturbance to track, whatever an entry leaves
+    assert untracked(rows[1:], 1.25, {"unsteady-aero"}) == (1, None)
+
+
+def test_a_white_residual_made_redder_by_its_best_explanation_is_no_disturbance():
+    """A lagging servo beside a flapping-frequency law (6 + 6 lon flights of the held-out
+    benchmark's kind): the baseline's residual is white; `unsteady-aero`'s delay, a near tie
+    with the servo, takes the residual's higher frequencies and leaves it red. That is no
+    disturbance tracked: a catalogue effect is named, not `random-disturbance`."""
+    from fwid.diagnosis._diagnose import adequate
+    from fwid.diagnosis._disturbance import RED_MIN
+
+    rows = [{"explanation": ["unsteady-aero", "flap-frequency"]},
+            {"explanation": ["actuator-dynamics", "flap-frequency"]}]
+
+    class Scores:  # the redness each explanation leaves
+        def redness_of(self, names):
+            return 9.8 if "unsteady-aero" in names else 1.1
+
+    assert adequate([dict(r) for r in rows], Scores(), 1.25, {"unsteady-aero"}, set()) == rows
+    kept = adequate([dict(r) for r in rows], Scores(), RED_MIN + 2, {"unsteady-aero"}, set())
+    assert [r["explanation"] for r in kept] == [rows[1]["explanation"]]

@@ -1,4 +1,4 @@
-"""`actuator-dynamics`: the deflection that acts is the measured one through a servo.
+"""`actuator-dynamics`: the deflection that acts is the commanded one through a servo.
 
 `d_eff` replaces `d` in the load's own model (no new coefficient: the control derivative acts
 on `d_eff`), one column only, so it cannot soak up unrelated misfit. The family
@@ -6,14 +6,16 @@ on `d_eff`), one column only, so it cannot soak up unrelated misfit. The family
 second-order servo) and the classical servo nonlinearities, each of one to three numbers
 from a grid: a rate limit, a direction-dependent lag, and, before or after a first-order
 lag (Hammerstein and Wiener forms), a saturation, a dead band and a backlash (play in the
-linkage, the one with memory). The nonlinearities' sizes are fractions of the fitting
-flights' largest deflection, the rate limits fractions of their fastest deflection rate
-(`bind`): a limit only shows where the flights reach it, whatever the surface, its units
-or the manoeuvre's size. The member is chosen by leave-one-flight-out error on
-the fitting flights, as `nonlinear-aero`'s size; a nonlinear or rate-limited member's lag is
-then refined on `LAGS` up to 0.1 s (`refine`). The grids are generic (servo bandwidths of
-a few to tens of Hz; limits, play and rate limits as fractions of what the flights reach),
-not a simulator's values.
+linkage, the one with memory). The servo acts on the deflection as commanded: the measured
+one less its flapping ripple (`Signals.commanded`), which the wings, not the servo, impose.
+The nonlinearities' sizes are fractions of the fitting flights' largest commanded
+deflection, the rate limits the times to cross it (`bind`): a limit only shows where the
+flights reach it, whatever the surface, its units, the manoeuvre's size or the sample rate.
+The member is chosen by leave-one-flight-out error on the fitting flights, as
+`nonlinear-aero`'s size; a nonlinear or rate-limited member's lag is then refined on `LAGS`
+up to 0.1 s (`refine`). The grids are generic (servo bandwidths of a few to tens of Hz;
+limits, play and rate limits relative to what the flights reach), not a simulator's
+values.
 """
 
 from __future__ import annotations
@@ -38,9 +40,11 @@ NONLINEAR = {"saturation": (0.5, 0.75), "dead-band": (0.1, 0.2), "backlash": (0.
 #: Their lags [s]: the grid tried with every size; the chosen member's lag is then refined
 #: on `LAGS` up to 0.1 s (`refine`; `SHORT` is not part of that grid).
 NONLINEAR_LAGS = (0.02, 0.05)
-#: The rate limits, as fractions of the fastest deflection rate (`bind` makes them rad/s),
-#: and their lags [s].
-RATE_LIMITS = (0.2, 0.4, 0.7)
+#: The rate limits, as the time [s] the servo takes to cross the flights' largest
+#: deflection (`bind` makes them rad/s: that deflection over the time; a property of the
+#: servo and the manoeuvre's size, not of the sample rate or the surface's ripple), and
+#: their lags [s].
+RATE_LIMITS = (0.05, 0.1, 0.2)
 RATE_LAGS = (0.02, 0.05)
 
 
@@ -125,21 +129,21 @@ def filter_text(variant: tuple) -> str:
                                   f"{p[1]:g} s falling"}[kind]()
 
 
-def acting_all(measured: np.ndarray, dt: float, cutoff: float, variants) -> np.ndarray:
+def acting_all(command: np.ndarray, dt: float, cutoff: float, variants) -> np.ndarray:
     """The acting deflection's cycle-averaged part under each servo of `variants`, `(n,
-    len(variants))`: the servo acts on the deflection perturbation as measured (both parts,
-    `Signals.measured`), and its output is split as the loads it drives were
+    len(variants))`: the servo acts on the deflection perturbation `command` (both parts,
+    `Signals.commanded`), and its output is split as the loads it drives were
     (`_signals.averaged`, below `cutoff` [Hz]; all outputs in one call). A nonlinear servo
     does not commute with the split: a direction-dependent lag or a rate limit on the
     cycle-averaged deflection, whose steps the split has smoothed, is not the servo on the
     steps."""
-    return averaged(np.stack([actuator_filter(measured, dt, v) for v in variants]), dt,
+    return averaged(np.stack([actuator_filter(command, dt, v) for v in variants]), dt,
                     cutoff).T
 
 
-def acting(measured: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np.ndarray:
+def acting(command: np.ndarray, dt: float, cutoff: float, variant: tuple) -> np.ndarray:
     """The acting deflection's cycle-averaged part under the servo `variant` (`acting_all`)."""
-    return acting_all(measured, dt, cutoff, (variant,))[:, 0]
+    return acting_all(command, dt, cutoff, (variant,))[:, 0]
 
 
 def _all_columns(s: Signals, load, variants) -> np.ndarray:
@@ -167,31 +171,28 @@ def refine(variant: tuple) -> tuple:
 
 def _bind(effect: Effect, engine, idx) -> Effect:
     """The members with their nonlinearities sized on the fitting units' largest deflection
-    of the manoeuvred axis's control (its 99th percentile of `|d|`), their rate limits on its
-    fastest rate (the 99th percentile of `|d'|`), both of the deflection as measured, which
-    the servo acts on (`_columns`); members that cannot be sized (a control that never
-    moves) go."""
+    of the manoeuvred axis's control (the 99th percentile of `|d|`, as commanded: the servo's
+    input, `Signals.commanded`) and their rate limits on the time a servo would take to
+    cross it (`RATE_LIMITS`); members that cannot be sized (a control that never moves) go."""
     axis = axis_of(engine.own[0]) if engine.own else "lon"
-    units = [engine.units[i].signals for i in idx
-             if AXIS_INPUT[axis] in engine.units[i].signals.slow]
-    measured = [(s.measured(AXIS_INPUT[axis]), s.dt) for s in units]
-    d = [np.abs(x) for x, _ in measured]
-    rates = [np.abs(np.diff(x)) / dt for x, dt in measured if len(x) > 1]
+    d = [np.abs(engine.units[i].signals.commanded(AXIS_INPUT[axis])) for i in idx
+         if AXIS_INPUT[axis] in engine.units[i].signals.slow]
     largest = float(np.percentile(np.concatenate(d), 99.0)) if d else 0.0
-    scale = dict.fromkeys(NONLINEAR, largest)
-    scale["rate-limit"] = float(np.percentile(np.concatenate(rates), 99.0)) if rates else 0.0
     out = []
     for v in effect.variants:
-        if v[0] not in scale:
+        if v[0] == "rate-limit":
+            if largest > 0.0:
+                out.append((v[0], v[1], largest / v[2]))
+        elif v[0] not in NONLINEAR:
             out.append(v)
-        elif scale[v[0]] > 0.0:
-            out.append((v[0], v[1], v[2] * scale[v[0]], *v[3:]))
+        elif largest > 0.0:
+            out.append((v[0], v[1], v[2] * largest, *v[3:]))
     return dataclasses.replace(effect, variants=tuple(out))
 
 
 EFFECT = Effect(
     "actuator-dynamics",
-    "the acting deflection is the measured one through a servo: a lag, a delay, both, a "
+    "the acting deflection is the commanded one through a servo: a lag, a delay, both, a "
     "second-order servo, a rate limit, a direction-dependent lag, a saturation, dead band "
     "or backlash before or after a lag",
     "averaged",

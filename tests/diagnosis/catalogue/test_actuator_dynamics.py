@@ -101,37 +101,42 @@ def test_backlash_holds_until_the_input_crosses_its_play():
     assert np.all(np.diff(y[turn:end]) == 0.0) and y[end + 5] < y[turn]
 
 
-def _signals(slow, fast, dt=0.01):
-    """A flight's `Signals` holding only the elevator, split into `slow` and `fast`."""
+def _signals(slow, fast, dt=0.01, f=12.5):
+    """A flight's `Signals` holding only the elevator, split into `slow` and `fast`, flapping
+    at `f` Hz; its whole record is the elevator as commanded (`_signals.commanded`)."""
     import dataclasses
 
-    from fwid.diagnosis._signals import Signals
+    from fwid.diagnosis._signals import Signals, commanded
 
     n = len(slow)
+    phase = 2 * np.pi * f * np.arange(n) * dt
     fields = {f.name: None for f in dataclasses.fields(Signals)}
-    fields.update(name="x", t=np.arange(n) * dt, dt=dt, slow={"de": slow}, fast={"de": fast},
-                  cutoff=5.0, whole={"de": slow + fast}, edge=0)
+    fields.update(name="x", t=np.arange(n) * dt, dt=dt, phase=phase, slow={"de": slow},
+                  fast={"de": fast}, cutoff=5.0, whole={"de": commanded(slow + fast, phase)},
+                  edge=0)
     return Signals(**fields)
 
 
-def test_the_nonlinear_members_are_sized_on_the_flights_largest_deflection_and_rate():
+def test_the_nonlinear_members_are_sized_on_the_commanded_deflection():
+    """Saturations on the largest commanded deflection, rate limits as the times to cross it;
+    the flapping ripple of the measured column (here 12.5 Hz, locked to the phase) counts in
+    neither."""
     from types import SimpleNamespace
+
+    from fwid.diagnosis._catalogue.actuator_dynamics import RATE_LIMITS
 
     e = get_effect("actuator-dynamics")
     t = np.arange(1001) * 0.01
-    slow = 0.2 * np.sin(2 * np.pi * 0.5 * t)  # rate up to 0.2 pi rad/s
-    fast = 0.01 * np.sin(2 * np.pi * 12.0 * t)  # above the split: rate up to 0.24 pi rad/s
+    slow = 0.2 * np.sin(2 * np.pi * 0.5 * t)
+    fast = 0.05 * np.sin(2 * np.pi * 12.5 * t + 0.3)  # the ripple, a quarter of the command
     sig = _signals(slow, fast)
     engine = SimpleNamespace(own=("X", "Z", "M"), units=[SimpleNamespace(signals=sig)])
     bound = e.bound(engine, (0,))
-    sizes = {v[2] for v in bound.variants if v[0] == "saturation"}
-    d = slow + fast  # the servo acts on the deflection as measured: both parts
-    scale = np.percentile(np.abs(d), 99.0)
-    assert sizes == {0.5 * scale, 0.75 * scale}
+    sizes = sorted({v[2] for v in bound.variants if v[0] == "saturation"})
+    scale = np.percentile(np.abs(slow), 99.0)
+    np.testing.assert_allclose(sizes, [0.5 * scale, 0.75 * scale], rtol=1e-3)
     rates = sorted({v[2] for v in bound.variants if v[0] == "rate-limit"})
-    fastest = np.percentile(np.abs(np.diff(d)) / 0.01, 99.0)
-    assert fastest > 0.3 * np.pi  # the fast part's rate counts
-    np.testing.assert_allclose(rates, [0.2 * fastest, 0.4 * fastest, 0.7 * fastest])
+    np.testing.assert_allclose(rates, sorted(scale / T for T in RATE_LIMITS), rtol=1e-3)
     sized = ("saturation", "dead-band", "backlash", "rate-limit")
     assert [v for v in bound.variants if v[0] not in sized] \
         == [v for v in e.variants if v[0] not in sized]
@@ -139,6 +144,51 @@ def test_the_nonlinear_members_are_sized_on_the_flights_largest_deflection_and_r
     still = SimpleNamespace(own=("X", "Z", "M"), units=[SimpleNamespace(
         signals=_signals(np.zeros(100), np.zeros(100)))])
     assert {v[0] for v in e.bound(still, (0,)).variants}.isdisjoint(sized)
+
+
+def test_the_commanded_deflection_is_the_measured_one_less_its_flapping_ripple():
+    """Three harmonics of the phase (a drifting wing beat) come off; a 3211's steps keep
+    their edges, which a low-pass would smooth."""
+    from fwid.diagnosis._signals import commanded
+
+    dt = 1 / 300
+    t = np.arange(int(5 / dt)) * dt
+    f = 12.0 + 0.5 * np.sin(2 * np.pi * 0.2 * t)
+    phase = np.concatenate([[0.0], np.cumsum(np.pi * dt * (f[1:] + f[:-1]))])
+    steps = 0.1 * np.select([(t > 1) & (t < 1.6), (t >= 1.6) & (t < 2.0)], [1.0, -1.0], 0.0)
+    ripple = 0.03 * np.sin(phase + 0.4) + 0.01 * np.cos(2 * phase) + 0.004 * np.sin(3 * phase)
+    got = commanded(steps + ripple, phase)
+    np.testing.assert_allclose(got - np.mean(got), steps - np.mean(steps), atol=2e-3)
+    edge = int(round(1.6 / dt))  # the step down at 1.6 s, in one sample
+    assert got[edge + 1] - got[edge - 1] < -0.19
+
+
+def test_a_rate_limited_servo_acts_on_the_command_not_on_the_ripple():
+    """A load driven by a rate-limited servo on a doublet's steps, the measured elevator
+    rippling at the wing beat (not commanded: the servo never sees it). The column
+    (the servo on the deflection as commanded) reproduces the load's cycle-averaged part;
+    the servo fed the ripple as well binds on every wing beat and does not."""
+    from fwid.decomposition import decompose
+    from fwid.diagnosis._catalogue.actuator_dynamics import _columns, actuator_filter
+
+    dt = 1 / 300
+    t = np.arange(int(6 / dt)) * dt
+    cmd = 0.25 * np.select([(t > 1) & (t < 1.5), (t >= 1.5) & (t < 2.0)], [1.0, -1.0], 0.0)
+    servo = ("rate-limit", 0.03, 3.0)
+    load = 3.0 * actuator_filter(cmd, dt, servo)
+    d = cmd + 0.06 * np.sin(2 * np.pi * 12.5 * t - 0.7)  # ripple rate 4.7 rad/s > 3
+    parts = decompose({"de": d, "M": load}, dt)
+    base = _signals(np.asarray(parts.averaged["de"]), np.asarray(parts.flapping["de"]), dt)
+    averaged = np.asarray(parts.averaged["M"])
+    inside = slice(int(0.5 / dt), -int(0.5 / dt))
+
+    def misfit(col):
+        k = np.dot(col[inside], averaged[inside]) / np.dot(col[inside], col[inside])
+        return np.std(k * col[inside] - averaged[inside]) / np.std(averaged[inside])
+
+    rippled = decompose({"x": actuator_filter(d, dt, servo)}, dt).averaged["x"]
+    new, old = misfit(_columns(base, "M", servo, None, None)[:, 0]), misfit(np.asarray(rippled))
+    assert new < 0.03 and old > 2 * new  # 1.6 % against 4.1 %
 
 
 def test_a_nonlinear_servo_acts_on_the_measured_deflection_before_the_split():
