@@ -122,8 +122,9 @@ def commanded(x: np.ndarray, phase: np.ndarray) -> np.ndarray:
     manoeuvres, not locked to the phase, keep their edges (a low-pass would smooth them)."""
     x = np.asarray(x, dtype=float)
     A = fourier_regressors(phase, RIPPLE_HARMONICS)
-    coef, *_ = np.linalg.lstsq(A - A.mean(axis=0), x - x.mean(), rcond=None)
-    return x - (A - A.mean(axis=0)) @ coef
+    A -= A.mean(axis=0)
+    coef, *_ = np.linalg.lstsq(A, x - x.mean(), rcond=None)
+    return x - A @ coef
 
 
 def averaged(x: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
@@ -147,7 +148,7 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
     parts = decompose({c: flight[c] for c in names}, dt, split_cutoff=cutoff)
     keep = slice(round(EDGE / dt), flight.n - round(EDGE / dt))
     f = np.asarray(flight["f"], dtype=float)
-    phase = np.asarray(flapping_phase(f, dt))
+    phase = _phase(flight)
     slow = {c: np.asarray(parts.averaged[c] - flight.trim_value(c))[keep]
             for c in SLOW if c in names}
     slow["f"] = f[keep] - np.mean(f)
@@ -176,6 +177,11 @@ def signals(flight: Flight, *, cutoff: float = 5.0) -> Signals:
     )
 
 
+def _phase(flight: Flight) -> np.ndarray:
+    """The whole flight's flapping phase from its measured frequency `f`."""
+    return np.asarray(flapping_phase(np.asarray(flight["f"], dtype=float), flight.dt))
+
+
 def _both(parts, flight: Flight, name: str) -> np.ndarray:
     """Both parts of `name` in the decomposition `parts` of `flight`, less its trim."""
     return np.asarray(parts.averaged[name] + parts.flapping[name]) - flight.trim_value(name)
@@ -185,7 +191,7 @@ def command(flight: Flight, name: str, cutoff: float = 5.0) -> np.ndarray:
     """The whole flight's control `name` as commanded (`commanded`: below the noise filter,
     both parts of the split less the flapping ripple), as `Signals.whole` holds it."""
     both = _both(decompose({name: flight[name]}, flight.dt, split_cutoff=cutoff), flight, name)
-    return commanded(both, np.asarray(flapping_phase(np.asarray(flight["f"], float), flight.dt)))
+    return commanded(both, _phase(flight))
 
 
 def cycle_averaged(flight: Flight, names: Sequence[str], cutoff: float = 5.0

@@ -186,10 +186,10 @@ def test_an_entry_that_tracks_a_disturbance_goes_with_what_came_after_it():
 
 
 def test_a_white_residual_made_redder_by_its_best_explanation_is_no_disturbance():
-    """A lagging servo beside a flapping-frequency law (6 + 6 lon flights of the held-out
-    benchmark's kind): the baseline's residual is white; `unsteady-aero`'s delay, a near tie
-    with the servo, takes the residual's higher frequencies and leaves it red. That is no
-    disturbance tracked: a catalogue effect is named, not `random-disturbance`."""
+    """The confidence set's adequacy filter, with the rednesses of a held-out pair case (a
+    lagging servo beside a flapping-frequency law): on a white baseline residual (1.25) the
+    explanation holding `unsteady-aero`, which leaves it at 9.8, stays (no disturbance to
+    track); on a red one it goes, as before."""
     from fwid.diagnosis._diagnose import adequate
     from fwid.diagnosis._disturbance import RED_MIN
 
