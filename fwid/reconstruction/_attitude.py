@@ -54,7 +54,8 @@ def nominal_rates(R: np.ndarray, dt: float) -> np.ndarray:
 
 
 def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
-                    start=None, passes: int = PASSES, params=None, lengths=None) -> Attitude:
+                    start=None, passes: int = PASSES, params=None, lengths=None,
+                    ends: bool = True) -> Attitude:
     """Smooth a batch of attitude records of one length.
 
     **Arguments:**
@@ -68,7 +69,9 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
       its noise is still searched (the motion's levels kept);
     - `passes`: passes of the iterated smoother;
     - `lengths` `(B,)`: each record's samples where records of several lengths are padded
-      to one `N` (`tracked`, `gyro_mask` False there; see `smooth_batch`).
+      to one `N` (`tracked`, `gyro_mask` False there; see `smooth_batch`);
+    - `ends`: the last pass holds each end's angular acceleration to the record's own
+      (`smooth_batch`; the earlier passes only give the nominal).
 
     **Returns:** an `Attitude`.
     """
@@ -91,11 +94,12 @@ def smooth_attitude(quat, tracked, phase, omega, dt: float, *, gyro=None, gyro_m
         g3, gm3 = axes(np.asarray(gyro, float)), np.repeat(gyro_mask, 3, axis=0)
     if gyro is not None and params is not None:
         params = [(p[0], p[1], None) for p in params]
-    for _ in range(passes):
+    for k in range(passes):
         wn = nominal_rates(nom, dt)
         z = np.where(tracked[..., None], log_so3(np.swapaxes(nom, -1, -2) @ Rm), 0.0)
         sm = smooth_batch(axes(z), mask3, ph3, om3, dt, gyro=g3, gyro_mask=gm3,
-                          u=axes(-dt * wn), scale=ATTITUDE_SCALE, params=params,
+                          ends=ends and k == passes - 1, u=axes(-dt * wn), scale=ATTITUDE_SCALE,
+                          params=params,
                           lengths=None if lengths is None else np.repeat(lengths, 3))
         params = sm.params
         nom = nom @ exp_so3(back(sm.pos))

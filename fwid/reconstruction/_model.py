@@ -85,6 +85,12 @@ def rows(phase, omega, rate, bias: bool, xp=np) -> dict:
                                              ("gyro", gyro))}
 
 
+def slow_mask(bias: bool) -> np.ndarray:
+    """1 on the white-jerk states, 0 on the harmonics' coefficients and the bias:
+    `rows(...)["acc"] * slow_mask` is the slow part's acceleration."""
+    return np.array([1.0] * 3 + [0.0] * (2 * HARMONICS) + [0.0] * int(bias))
+
+
 def prior(n: int, bias: bool, scale: float) -> np.ndarray:
     """A diffuse prior covariance, in units of the measurement variance (`scale`: the
     variance a measurement is guessed to have)."""

@@ -91,11 +91,12 @@ def _bucket(lengths) -> int:
 
 
 def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, params=None,
-              passes=None):
+              passes=None, ends=None):
     """Smooth the attitude of several takes, vmapped by sample step and padded to one length
-    (`passes`: per take)."""
+    (`passes`, `ends`: per take; `ends` as `smooth_attitude`'s, default True)."""
     out = [None] * len(takes)
-    key = (lambda i: (round(takes[i].dt, 12), None if passes is None else passes[i]))
+    ends = [True] * len(takes) if ends is None else ends
+    key = (lambda i: (round(takes[i].dt, 12), None if passes is None else passes[i], ends[i]))
     for idx in _groups(range(len(takes)), key):
         dt = takes[idx[0]].dt
         lens = np.array([len(tracked[i]) for i in idx])
@@ -111,6 +112,7 @@ def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, p
             kw["params"] = [p for i in idx for p in params[i]]
         if passes is not None:
             kw["passes"] = passes[idx[0]]
+        kw["ends"] = ends[idx[0]]
         att = smooth_attitude(_stack([quats[i] for i in idx], n, np.nan),
                               _stack([tracked[i] for i in idx], n, False),
                               _stack(ph, n, "edge"), _stack(om, n, np.nan), dt, lengths=lens, **kw)
@@ -121,8 +123,9 @@ def _attitude(takes, quats, tracked, fs, gyros=None, gmasks=None, starts=None, p
     return out
 
 
-def _smooth_positions(takes, pos, tracked, fs):
-    """Smooth positions `(N, 3)` per axis (three problems a take), vmapped by sample step."""
+def _smooth_positions(takes, pos, tracked, fs, ends=True):
+    """Smooth positions `(N, 3)` per axis (three problems a take), vmapped by sample step
+    (`ends`: as `smooth_batch`)."""
     out = [None] * len(takes)
     for idx in _groups(range(len(takes)), lambda i: round(takes[i].dt, 12)):
         dt = takes[idx[0]].dt
@@ -131,7 +134,8 @@ def _smooth_positions(takes, pos, tracked, fs):
         ph, om = zip(*(phase_of(fs[i], dt) for i in idx))
         sm = smooth_batch(_stack([pos[i] for i in idx], n, np.nan),
                           _stack([tracked[i] for i in idx], n, False),
-                          _stack(ph, n, "edge"), _stack(om, n, np.nan), dt, scale=1e-6, lengths=lens)
+                          _stack(ph, n, "edge"), _stack(om, n, np.nan), dt, scale=1e-6,
+                          lengths=lens, ends=ends)
         for j, i in enumerate(idx):
             out[i] = type(sm)(*(v[j, :lens[j]] if k in ("pos", "vel", "acc", "slow") else
                                 v[j] if isinstance(v, np.ndarray) else v
@@ -146,7 +150,7 @@ def _translation(takes, pos, tracked, fs, atts):
     refs = [tuple(f.slow[:, d, :] for d in range(3))
             for f in _smooth_positions(takes, pos, tracked, fs)]
     body = [split(p, r[0], a.R) for p, r, a in zip(pos, refs, atts)]  # NaN where untracked
-    second = _smooth_positions(takes, body, tracked, fs)
+    second = _smooth_positions(takes, body, tracked, fs, ends=False)  # its slow part is small
     return [s._replace(**dict(zip(("pos", "vel", "acc"),
                                   compose(r, (s.pos, s.vel, s.acc), a.R, a.w, a.a))))
             for s, r, a in zip(second, refs, atts)]
@@ -330,7 +334,8 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     # 1. attitude without the gyro (the final one for a fwid raw CSV); the clock from it
     # one pass where the gyro's pass follows (it starts from this one's attitude), else two
     att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
-                     passes=[1 if t.onboard is not None else 2 for t in takes])
+                     passes=[1 if t.onboard is not None else 2 for t in takes],
+                     ends=[not _logs_gyro(t) for t in takes])
     logged = [i for i, t in enumerate(takes) if t.onboard is not None]
     tasks = [((takes[i], att0[i].w, att0[i].sigma, clock_offset, min_overlap, fs[i]), {})
              for i in logged]
@@ -392,6 +397,12 @@ def _key(f, take: RawTake) -> str:
     several (a flight of a take split into stretches may fail while the others go on)."""
     several = take.stretch is not None and take.stretch["of"] > 1
     return f"{f} ({take.name})" if several else str(f)
+
+
+def _logs_gyro(take: RawTake) -> bool:
+    """Whether a take's autopilot log holds a gyro (its attitude is then smoothed again
+    with it)."""
+    return take.onboard is not None and all(k in take.onboard.columns for k in "pqr")
 
 
 def _gyro(stage) -> bool:

@@ -6,7 +6,9 @@ bandwidth `f_h` of the flapping coefficients and (with a gyro) the gyro's noise 
 the attitude's are chosen on a grid (`_model.CUTOFFS`, ...) by the innovations'
 log-likelihood, with the overall noise scale concentrated out (it is `mean(nu^2 / S)`);
 the likelihood is evaluated on the take's most active `ML_WINDOW` samples (`_active_window`).
-The problems are split over the CPU devices (one per core, `fwid._jax_setup`).
+With `ends`, the smoother runs again with the slow acceleration at each problem's first and
+last sample measured as the problem's own (`_end_prior`): a take's ends are seen from one
+side only. The problems are split over the CPU devices (one per core, `fwid._jax_setup`).
 """
 
 from __future__ import annotations
@@ -48,19 +50,21 @@ def _fns():
         smooth = functools.partial(smooth, lead=lead)
         last = functools.partial(jnp.moveaxis, source=0, destination=-1)
 
-        def model(phase, omega, rate, Z, u):
-            bias = Z.shape[-2] == 2
+        def model(phase, omega, rate, Z, u, n):
+            bias = n == mdl.n_states(True)
             rows = mdl.rows(phase, omega, rate, bias, xp=jnp)
-            H = jnp.stack([rows["pos"]] + ([rows["gyro"]] if bias else []), -2)  # (N, m, n)
-            return rows, H, u[:, None]  # u: the input of the first state
+            H = [rows["pos"]] + ([rows["gyro"]] if bias else [])
+            if Z.shape[-2] > len(H):  # the ends' prior on the slow acceleration (`_end_prior`)
+                H.append(rows["acc"] * mdl.slow_mask(bias))
+            return rows, jnp.stack(H, -2), u[:, None]  # (N, m, n); u: the first state's input
 
         def one_stats(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
-            _, H, U = model(phase, omega, rate, Z, u)
+            _, H, U = model(phase, omega, rate, Z, u, F.shape[0])
             return jax.vmap(filter_stats, in_axes=(None, -1, None, -1, None, None, None, None,
                                                    None))(F, Q, H, R, Z, MK, U, m0, P0)
 
         def one_smooth(F, Q, phase, omega, rate, R, Z, MK, u, m0, P0):
-            rows, H, U = model(phase, omega, rate, Z, u)
+            rows, H, U = model(phase, omega, rate, Z, u, F.shape[0])
             x, st = smooth(F, Q, H, R, Z, MK, U, m0, P0)
             out = [jnp.einsum("kn,knc->kc", rows[k], x) for k in ("pos", "vel", "acc")]
             return (*out, x[0, -1, :], st, x[:, :3, :])  # the last: the slow part alone
@@ -172,8 +176,21 @@ class Smoothed(NamedTuple):
     slow: np.ndarray | None = None  # (M, N, 3, c): the slow part's value, rate, acceleration
 
 
+def _end_prior(slow, s2, lengths):
+    """The slow part's acceleration at a take's ends, as the take's own (empirical Bayes):
+    its mean `(M, c)` over each problem's middle 80 % and that stretch's variance (averaged
+    over the columns) in units of the measurement noise's, `(M,)`."""
+    mean, var = [], []
+    for m, L in enumerate(lengths):
+        a = slow[m, L // 10:L - L // 10, 2, :]
+        mean.append(np.mean(a, 0))
+        var.append(max(float(np.mean(np.var(a, 0))), 1e-30) / max(float(s2[m]), 1e-30))
+    return np.array(mean), np.array(var)
+
+
 def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None, u=None,
-                 scale: float = 1e-6, params=None, lengths=None) -> Smoothed:
+                 ends: bool = True, scale: float = 1e-6, params=None,
+                 lengths=None) -> Smoothed:
     """Smooth `M` independent problems of one length `N`, each with `c` data columns that
     share the noise levels.
 
@@ -184,6 +201,9 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     - `gyro` `(M, N, c)`, `gyro_mask` `(M, N)`: rate measurements (with a bias state), or None;
     - `u` `(M, N, c)`: known input of the first state per step (the attitude's nominal
       increment), or None;
+    - `ends`: smooth each end again with its slow acceleration held to the take's own
+      (`_end_prior`; the motion at an end is seen from one side only, and the white-jerk
+      model's diffuse start leaves its acceleration there free);
     - `scale`: the measurement variance guessed, for the diffuse prior;
     - `params`: `(cutoff, coeff_bandwidth, gyro_ratio)` per problem to skip the search;
       with `gyro_ratio` None, only the gyro's noise is searched;
@@ -244,14 +264,27 @@ def smooth_batch(z, mask, phase, omega, dt: float, *, gyro=None, gyro_mask=None,
     R = np.stack([noise(1, 1, 1, g)[1] for _, _, g in params])
     most = max(2, int(GAIN_BYTES // (N * n * n * 8 * 3)))  # problems per call at most
     chunk = -(-M // -(-M // most))  # as many per call as that allows, in calls of one size
-    parts = []
-    for a in range(0, M, chunk):
-        s = slice(a, a + chunk)
-        args, m = _spread(Q[s], phase[s], omega[s], R[s], Z[s], MK[s], u[s], m0[s])
-        res = fns["smooth"](F_, *args[:3], rate_, *args[3:], P0_)
-        parts.append([np.asarray(r)[:m] for r in res])
-    pos, vel, acc_, b, acc, slow = (np.concatenate(p) for p in zip(*parts))
+
+    def run(Q, phase, omega, R, Z, MK, u, m0):
+        parts = []
+        for a in range(0, len(Q), chunk):
+            s = slice(a, a + chunk)
+            args, m = _spread(Q[s], phase[s], omega[s], R[s], Z[s], MK[s], u[s], m0[s])
+            res = fns["smooth"](F_, *args[:3], rate_, *args[3:], P0_)
+            parts.append([np.asarray(r)[:m] for r in res])
+        return [np.concatenate(p) for p in zip(*parts)]
+
+    pos, vel, acc_, b, acc, slow = run(Q, phase, omega, R, Z, MK, u, m0)
     s2 = acc[:, 1] / np.maximum(acc[:, 2], 1)  # the concentrated noise scale
+    if ends:  # again, each end held to the take's own slow acceleration (`_end_prior`)
+        lens = np.full(M, N) if lengths is None else np.asarray(lengths, int)
+        mean, var = _end_prior(slow, s2, lens)
+        Zp, MKp = np.zeros((M, N, 1, c)), np.zeros((M, N, 1), bool)
+        for m, L in enumerate(lens):
+            Zp[m, [0, L - 1], 0], MKp[m, [0, L - 1], 0] = mean[m], True
+        pos, vel, acc_, b, _, slow = run(Q, phase, omega, np.concatenate([R, var[:, None]], 1),
+                                         np.concatenate([Z, Zp], 2),
+                                         np.concatenate([MK, MKp], 2), u, m0)
     out = {"pos": pos, "vel": vel, "acc": acc_}
     ratio = np.array([p[2] for p in params])
     return Smoothed(out["pos"], out["vel"], out["acc"], b if bias else None,

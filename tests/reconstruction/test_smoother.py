@@ -92,3 +92,34 @@ def test_window_of_a_long_take_sits_on_its_manoeuvre():
     idx = _active_window(z[None, :, None], np.zeros((1, N, 1)), np.ones((1, N), bool), dt,
                          omega=omega[None])
     assert t[idx[0, 0]] < centre - 1.0 and t[idx[0, -1]] > centre + 1.0
+
+
+def _slow_records(M, N, dt, rng):
+    """`M` records of random slow motion (five sines, 0.2-2 Hz) with a 12 Hz wing beat and
+    0.4 mm noise; returns the data and the slow part's true acceleration `(M, N)`."""
+    t = np.arange(N) * dt
+    f = rng.uniform(0.2, 2.0, (M, 5, 1))
+    amp = 2e-3 * rng.standard_normal((M, 5, 1)) / f
+    ph = rng.uniform(0, 2 * np.pi, (M, 5, 1))
+    slow = np.sum(amp * np.sin(2 * np.pi * f * t + ph), 1)
+    acc = -np.sum(amp * (2 * np.pi * f) ** 2 * np.sin(2 * np.pi * f * t + ph), 1)
+    z = slow + 5e-4 * np.sin(2 * np.pi * 12.0 * t) + 4e-4 * rng.standard_normal((M, N))
+    phase, omega = phase_of(np.full(N, 12.0), dt)
+    return z[..., None], np.ones((M, N), bool), np.tile(phase, (M, 1)), np.tile(omega, (M, 1)), acc
+
+
+def test_ends_held_to_the_take_s_own_acceleration():
+    """The slow acceleration at a short take's first and last samples, where the motion is
+    seen from one side only, is nearer the truth with the ends' prior (`ends=True`) than with
+    the diffuse start alone, and the middle of the take does not move."""
+    dt, rng = 0.005, np.random.default_rng(11)
+    z, mask, phase, omega, acc = _slow_records(96, 900, dt, rng)
+    err = {}
+    for ends in (False, True):
+        sm = smooth_batch(z, mask, phase, omega, dt, ends=ends)
+        err[ends] = sm.slow[:, :, 2, 0] - acc
+    edge = np.r_[0:10, 890:900]
+    rms = {k: np.sqrt(np.mean(e[:, edge] ** 2)) for k, e in err.items()}
+    assert rms[True] < 0.95 * rms[False]  # 0.90 here; 0.87-0.92 over seeds 11-13
+    mid = slice(300, 600)
+    assert np.max(np.abs(err[True][:, mid] - err[False][:, mid])) < 0.01 * np.std(acc)
