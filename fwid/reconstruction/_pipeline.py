@@ -335,7 +335,7 @@ def _reconstruct(files, pool, *, body, frame, onboard, clock_offset, max_dropout
     # one pass where the gyro's pass follows (it starts from this one's attitude), else two
     att0 = _attitude(takes, [t.quat for t in takes], [t.tracked for t in takes], fs,
                      passes=[1 if t.onboard is not None else 2 for t in takes],
-                     ends=[not _logs_gyro(t) for t in takes])
+                     ends=[not _gyro_follows(t) for t in takes])
     logged = [i for i, t in enumerate(takes) if t.onboard is not None]
     tasks = [((takes[i], att0[i].w, att0[i].sigma, clock_offset, min_overlap, fs[i]), {})
              for i in logged]
@@ -399,10 +399,12 @@ def _key(f, take: RawTake) -> str:
     return f"{f} ({take.name})" if several else str(f)
 
 
-def _logs_gyro(take: RawTake) -> bool:
-    """Whether a take's autopilot log holds a gyro (its attitude is then smoothed again
-    with it)."""
-    return take.onboard is not None and all(k in take.onboard.columns for k in "pqr")
+def _gyro_follows(take: RawTake) -> bool:
+    """Whether the take will have a gyro when staged (`_gyro`: its log's `p q r`, or the
+    `p_gyro ..` its map names in the take): its attitude is then smoothed again with it."""
+    names = (take.onboard.columns if take.onboard is not None else
+             {k.removesuffix("_gyro") for k in take.controls or {} if k.endswith("_gyro")})
+    return all(k in names for k in "pqr")
 
 
 def _gyro(stage) -> bool:

@@ -158,3 +158,18 @@ def test_wrong_frame_named_by_the_gyro(tmp_path, motion, pose, capsys):
     assert "gyro" in err[0] and "--frame y-up" in err[0], err
     assert main(["reconstruct", str(p), "--out", str(tmp_path / "ok"), "--quiet",
                  "--no-figures", "--body", "DelFly"]) == 0
+
+
+def test_gyro_follows_names_a_log_s_gyro_and_a_map_s_in_the_take():
+    """The first attitude pass skips the ends' prior exactly where a gyro pass follows: a log
+    with `p q r`, or a map's `p_gyro ..` in the take; a fwid raw CSV's `p q r` are no gyro."""
+    from types import SimpleNamespace as NS
+
+    from fwid.reconstruction._pipeline import _gyro_follows
+
+    pqr = dict.fromkeys("pqr", 0.0)
+    assert _gyro_follows(NS(onboard=NS(columns={"de": 0.0, **pqr}), controls=None))
+    assert not _gyro_follows(NS(onboard=NS(columns={"de": 0.0}), controls=None))
+    assert _gyro_follows(NS(onboard=None, controls={f"{k}_gyro": 0.0 for k in "pqr"}))
+    assert not _gyro_follows(NS(onboard=None, controls={"de": 0.0, **pqr}))
+    assert not _gyro_follows(NS(onboard=None, controls=None))
